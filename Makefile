@@ -1,0 +1,35 @@
+# Two commands do everything on a fresh machine: `make demo` and `make test`.
+# Both create the virtual environment in .venv first (idempotent: nothing happens when
+# requirements.lock has not changed since the last install).
+
+VENV      := .venv
+PY        := $(VENV)/bin/python
+STAMP     := $(VENV)/.installed
+# Python 3.13 is required by bpy 5.2. pyenv provides it on our machines; elsewhere python3.13.
+BOOT_PY   ?= $(shell if PYENV_VERSION=3.13.0 python3.13 --version >/dev/null 2>&1; \
+                then echo "env PYENV_VERSION=3.13.0 python3.13"; else echo python3.13; fi)
+
+.PHONY: setup demo test test-fast extension clean
+
+setup: $(STAMP)
+
+$(STAMP): requirements.lock
+	@test -x $(PY) || $(BOOT_PY) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -r requirements.lock
+	@touch $(STAMP)
+
+demo: setup
+	$(PY) -m demo_blends.run_demos --out out
+
+test: setup
+	$(PY) -m pytest -q
+
+test-fast: setup
+	$(PY) -m pytest -q -m "not slow"
+
+extension: setup
+	$(PY) tools/build_extension.py --out dist
+
+clean:
+	rm -rf dist out .pytest_cache

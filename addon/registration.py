@@ -1,0 +1,29 @@
+"""Registers and unregisters every Blender class the add-on defines.
+
+Each Blender-facing module lists its classes in a module-level `CLASSES` tuple (in dependency
+order: property groups before the things that point at them). This module walks those lists,
+so adding a class means adding it to its module's list, nowhere else.
+"""
+
+import bpy
+
+from . import properties
+from .ui import sidebar
+
+MODULES = (properties, sidebar)
+
+
+def register():
+    for module in MODULES:
+        for cls in module.CLASSES:
+            bpy.utils.register_class(cls)
+        if hasattr(module, "register_extras"):
+            module.register_extras()
+
+
+def unregister():
+    for module in reversed(MODULES):
+        if hasattr(module, "unregister_extras"):
+            module.unregister_extras()
+        for cls in reversed(module.CLASSES):
+            bpy.utils.unregister_class(cls)

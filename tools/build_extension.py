@@ -1,0 +1,135 @@
+"""Build the Blender extension zip(s) with Blender's own builder and validate them.
+
+The wheels listed in blender_manifest.toml are downloaded (exact files, no dependency
+resolution) into wheels/ when missing. The build runs from a staging copy of the files named in
+the manifest's [build] paths, so a build for a subset of platforms (`--platform linux-x64`, used
+by the tests) carries only that platform's wheels. One zip per platform is written to --out.
+"""
+
+import argparse
+import importlib.util
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+MANIFEST = ROOT / "blender_manifest.toml"
+
+# Blender platform name -> substrings that identify its wheels' platform tags.
+PLATFORM_TAGS = {
+    "linux-x64": ("linux", "x86_64"),
+    "windows-x64": ("win_amd64",),
+    "macos-arm64": ("macosx", "arm64"),
+    "macos-x64": ("macosx", "x86_64"),
+}
+
+
+def blender_ext_script() -> Path:
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or not spec.submodule_search_locations:
+        sys.exit("error: the bpy module is not installed; run `make setup` first")
+    found = sorted(Path(spec.submodule_search_locations[0]).glob("*/scripts/addons_core/bl_pkg/cli/blender_ext.py"))
+    if not found:
+        sys.exit("error: Blender's extension builder (bl_pkg/cli/blender_ext.py) is missing from the bpy wheel")
+    return found[-1]
+
+
+def wheel_platform(filename: str) -> str | None:
+    """The Blender platform a wheel is for, or None for a pure-Python wheel."""
+    platform_tag = filename[: -len(".whl")].split("-")[-1]
+    if platform_tag == "any":
+        return None
+    for platform, markers in PLATFORM_TAGS.items():
+        if all(marker in platform_tag for marker in markers):
+            return platform
+    raise SystemExit(f"error: cannot tell which platform wheel {filename!r} is for")
+
+
+def download_wheel(filename: str, dest: Path) -> None:
+    """Download exactly `filename` from the package index into `dest`."""
+    name, version, python_tag, _abi, platform_tag = filename[: -len(".whl")].split("-")
+    command = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps", "--only-binary=:all:",
+               "--dest", str(dest), f"{name}=={version}"]
+    if platform_tag != "any":
+        command += ["--python-version", python_tag.removeprefix("cp")[0] + "." + python_tag.removeprefix("cp")[1:]]
+        for tag in platform_tag.split("."):
+            command += ["--platform", tag]
+    print(f"downloading {filename}", flush=True)
+    subprocess.run(command, check=True)
+    if not (dest / filename).is_file():
+        got = ", ".join(p.name for p in dest.glob(f"{name}-*.whl")) or "nothing"
+        raise SystemExit(f"error: expected {filename} from the index, got {got}")
+
+
+def staged_manifest(text: str, platforms: list[str], wheels: list[str]) -> str:
+    """The manifest text restricted to `platforms` and their `wheels`.
+
+    The [build] section is dropped: the staging folder already holds only the listed paths, and
+    Blender 5.2's builder miscounts wheels under --split-platforms when [build] paths is set.
+    """
+    text = re.sub(r"(?ms)^\[build\].*?(?=^\[|\Z)", "", text)
+    text = re.sub(r"(?m)^platforms = \[.*\]$", "platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]", text)
+    wheel_block = "wheels = [\n" + "".join(f'  "{w}",\n' for w in wheels) + "]"
+    return re.sub(r"(?ms)^wheels = \[.*?^\]", lambda _m: wheel_block, text)
+
+
+def build(platforms: list[str], out_dir: Path) -> list[Path]:
+    manifest_text = MANIFEST.read_text()
+    manifest = tomllib.loads(manifest_text)
+    unknown = set(platforms) - set(manifest["platforms"])
+    if unknown:
+        raise SystemExit(f"error: platform(s) {sorted(unknown)} not in the manifest's {manifest['platforms']}")
+    wheels = [w for w in manifest["wheels"] if wheel_platform(Path(w).name) in (None, *platforms)]
+
+    wheel_dir = ROOT / "wheels"
+    wheel_dir.mkdir(exist_ok=True)
+    for wheel in wheels:
+        if not (ROOT / wheel).is_file():
+            download_wheel(Path(wheel).name, wheel_dir)
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    script = blender_ext_script()
+    with tempfile.TemporaryDirectory(prefix="spectral_ext_") as tmp:
+        stage = Path(tmp)
+        for entry in manifest["build"]["paths"]:
+            source = ROOT / entry
+            if source.is_dir():
+                shutil.copytree(source, stage / entry, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+            else:
+                shutil.copy2(source, stage / entry)
+        (stage / "wheels").mkdir()
+        for wheel in wheels:
+            shutil.copy2(ROOT / wheel, stage / "wheels")
+        (stage / "blender_manifest.toml").write_text(staged_manifest(manifest_text, platforms, wheels))
+        run([sys.executable, str(script), "build", "--source-dir", str(stage),
+             "--output-dir", str(out_dir), "--split-platforms"])
+    built = [out_dir / f"{manifest['id']}-{manifest['version']}-{p.replace('-', '_')}.zip" for p in platforms]
+    for package in built:
+        run([sys.executable, str(script), "validate", str(package)])
+    return built
+
+
+def run(command: list) -> None:
+    """Run a build step; a failure ends the build with the step's own message above it."""
+    if subprocess.run(command).returncode != 0:
+        raise SystemExit(f"error: {Path(command[1]).name} {command[2]} failed (see its messages above)")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--out", type=Path, default=ROOT / "dist", help="output folder for the zips")
+    parser.add_argument("--platform", action="append", choices=sorted(PLATFORM_TAGS),
+                        help="build only for this platform (repeatable); default: every platform")
+    args = parser.parse_args(argv)
+    platforms = args.platform or tomllib.loads(MANIFEST.read_text())["platforms"]
+    for package in build(platforms, args.out.resolve()):
+        print(f"built and validated {package}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
