@@ -1,15 +1,26 @@
 """Spectra: values tabulated on the shared wavelength grid, and every way to make one.
 
-A `Spectrum` is immutable and holds `GRID.size` float64 values (see `wavelengths`). Sources:
-constant, (λ, value) table, Gaussian, and the scene format's JSON description (`from_spec`).
+A `Spectrum` is immutable and holds `GRID.size` float64 values (see `wavelengths`). Sources: constant,
+(λ, value) table, Gaussian, CIE standard illuminants, and the scene format's JSON description (`from_spec`).
+
+Resampling onto GRID is linear interpolation; a tabulated source (table, illuminant dataset) is 0 outside
+the wavelength range it covers.
 """
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
+from . import colorimetry
 from .errors import SpectralError
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
+
+ILLUMINANT_NAMES = (
+    "D65", "D50", "A", "E",
+    *(f"FL{i}" for i in range(1, 13)),
+    "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2",
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,6 +86,22 @@ def gaussian(peak: float, width: float, height: float = 1.0) -> Spectrum:
     if width <= 0:
         raise SpectralError(f"Gaussian spectrum width must be positive, got {width}")
     return Spectrum(height * np.exp(-0.5 * ((GRID - peak) / width) ** 2))
+
+
+@lru_cache(maxsize=None)
+def _illuminant(name: str) -> Spectrum:
+    dataset = colorimetry.colour_science().SDS_ILLUMINANTS[name]
+    return table(dataset.wavelengths, dataset.values, name=f"illuminant {name}")
+
+
+def illuminant(name: str) -> Spectrum:
+    """CIE standard illuminant `name` (see ILLUMINANT_NAMES; case does not matter) from colour-science's
+    datasets at the dataset's relative scale (D65, D50, A, E: 100 at 560 nm; FL, LED: as published); 0 outside
+    the dataset's range (D65, D50, A: 300–780 nm; E: 360–830 nm; FL and LED: 380–780 nm)."""
+    canonical = {known.upper(): known for known in ILLUMINANT_NAMES}.get(str(name).strip().upper())
+    if canonical is None:
+        raise SpectralError(f"unknown illuminant {name!r}; valid names: {', '.join(ILLUMINANT_NAMES)}")
+    return _illuminant(canonical)
 
 
 def from_spec(spec, name: str = "spectrum") -> Spectrum:
