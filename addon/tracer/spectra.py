@@ -1,16 +1,22 @@
 """Spectra: values tabulated on the shared wavelength grid, and every way to make one.
 
 A `Spectrum` is immutable and holds `GRID.size` float64 values (see `wavelengths`). Sources: constant,
-(λ, value) table, Gaussian, CIE standard illuminants, and the scene format's JSON description (`from_spec`).
+(λ, value) table, CSV file, Gaussian, Planck blackbody, CIE standard illuminants, and a smooth reflectance
+for an RGB colour; operations: λ window, scale and sum; and the scene format's JSON description
+(`from_spec`).
 
-Resampling onto GRID is linear interpolation; a tabulated source (table, illuminant dataset) is 0 outside
-the wavelength range it covers.
+Resampling onto GRID is linear interpolation; a tabulated source (table, CSV file, illuminant dataset)
+is 0 outside the wavelength range it covers.
 """
 
+import csv
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
+import scipy.constants
 
 from . import colorimetry
 from .errors import SpectralError
@@ -21,6 +27,14 @@ ILLUMINANT_NAMES = (
     *(f"FL{i}" for i in range(1, 13)),
     "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2",
 )
+RGB_METHODS = {"jakob2019": "Jakob 2019", "otsu2018": "Otsu 2018"}
+# Wavelength units a CSV file may be in, as nanometres per unit.
+CSV_UNITS = {"nm": 1.0, "um": 1e3, "µm": 1e3, "μm": 1e3, "A": 0.1, "Å": 0.1}
+
+_NM = 1e-9  # metres
+_PLANCK_C1 = 2 * scipy.constants.h * scipy.constants.c**2  # W·m²·sr⁻¹
+_PLANCK_C2 = scipy.constants.h * scipy.constants.c / scipy.constants.k  # m·K
+_WIEN_B = scipy.constants.Wien  # m·K
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,10 +76,17 @@ def constant(value: float) -> Spectrum:
     return Spectrum(np.full(GRID.shape, float(value)))
 
 
+def _float_array(numbers, what: str, name: str) -> np.ndarray:
+    try:
+        return np.asarray(numbers, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SpectralError(f"spectrum {name!r}: {what} must be a list of numbers") from None
+
+
 def table(wavelengths, values, name: str = "table") -> Spectrum:
     """Piecewise-linear spectrum through (λ, value) pairs; 0 outside the tabulated range."""
-    wavelengths = np.asarray(wavelengths, dtype=np.float64)
-    values = np.asarray(values, dtype=np.float64)
+    wavelengths = _float_array(wavelengths, "wavelengths", name)
+    values = _float_array(values, "values", name)
     if wavelengths.ndim != 1 or wavelengths.shape != values.shape:
         raise SpectralError(f"spectrum {name!r}: wavelengths and values must be two lists of equal length")
     if wavelengths.size == 0:
@@ -88,6 +109,108 @@ def gaussian(peak: float, width: float, height: float = 1.0) -> Spectrum:
     return Spectrum(height * np.exp(-0.5 * ((GRID - peak) / width) ** 2))
 
 
+def _nm_per_unit(units: str) -> float:
+    if units not in CSV_UNITS:
+        raise SpectralError(f"unknown wavelength unit {units!r}; use one of {', '.join(CSV_UNITS)}")
+    return CSV_UNITS[units]
+
+
+def _csv_fields(line: str) -> list[str]:
+    return [field.strip() for field in next(csv.reader([line]))]
+
+
+def _parse_csv_row(fields: list[str], where: str) -> tuple[float, float]:
+    if len(fields) != 2:
+        raise SpectralError(f"{where}: expected 2 comma-separated columns (wavelength, value), got {len(fields)}")
+    numbers = []
+    for field in fields:
+        try:
+            number = float(field)
+        except ValueError:
+            raise SpectralError(f"{where}: {field!r} is not a number") from None
+        if not np.isfinite(number):
+            raise SpectralError(f"{where}: {field!r} is not a finite number")
+        numbers.append(number)
+    return numbers[0], numbers[1]
+
+
+def _is_numeric(field: str) -> bool:
+    try:
+        float(field)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_csv_rows(path: Path) -> list[tuple[int, float, float]]:
+    """(line number, λ, value) of each data row; blank lines and `#` comments are skipped, and the first
+    row may be a header (any non-numeric field)."""
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except OSError as error:
+        raise SpectralError(f"cannot read spectrum file {str(path)!r}: {error.strerror}") from None
+    except UnicodeDecodeError:
+        raise SpectralError(f"spectrum file {str(path)!r} is not UTF-8 text") from None
+    rows = []
+    first = True
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        fields = _csv_fields(line)
+        header = first and not all(map(_is_numeric, fields))
+        if not header:
+            rows.append((number, *_parse_csv_row(fields, f"{path}, line {number}")))
+        first = False
+    return rows
+
+
+def from_csv(path, units: str = "nm") -> Spectrum:
+    """Spectrum from a CSV file of (wavelength, value) rows with strictly increasing wavelengths.
+
+    `units` is the wavelength unit (see CSV_UNITS); wavelengths are converted to nm, values are used as
+    they are. An optional header row, blank lines and `#` comment lines are allowed."""
+    scale = _nm_per_unit(units)
+    path = Path(path)
+    rows = _read_csv_rows(path)
+    if not rows:
+        raise SpectralError(f"spectrum file {str(path)!r} has no data rows (expected: wavelength, value)")
+    for (previous_line, previous, _), (line, lam, _) in zip(rows, rows[1:]):
+        if lam <= previous:
+            raise SpectralError(f"{path}, line {line}: wavelength {lam:g} {units} does not increase "
+                                f"(line {previous_line} has {previous:g} {units})")
+    _, wavelengths, values = zip(*rows)
+    return table(np.array(wavelengths) * scale, values, name=str(path))
+
+
+def _log_expm1(x):
+    """log(eˣ − 1) for x > 0 without overflow."""
+    return x + np.log1p(-np.exp(-x))
+
+
+def _kelvin(temperature) -> np.ndarray:
+    temperature = np.asarray(temperature, dtype=np.float64)
+    bad = ~(np.isfinite(temperature) & (temperature > 0))
+    if np.any(bad):
+        raise SpectralError(f"blackbody temperature must be a positive number of kelvin, got {temperature[bad][0]:g}")
+    return temperature
+
+
+def planck(lam, temperature):
+    """Planck's law: black-body spectral radiance in W·sr⁻¹·m⁻²·nm⁻¹ at wavelength(s) `lam` (nm) and
+    temperature(s) in kelvin; the two broadcast against each other. Underflows to 0, never overflows."""
+    lam_m = np.asarray(lam, dtype=np.float64) * _NM
+    x = _PLANCK_C2 / (lam_m * _kelvin(temperature))
+    per_metre = np.exp(np.log(_PLANCK_C1) - 5 * np.log(lam_m) - _log_expm1(x))
+    return per_metre * _NM
+
+
+def blackbody(temperature: float) -> Spectrum:
+    """Shape of a black body's spectral radiance at `temperature` kelvin, scaled so that its maximum over
+    all wavelengths (at Wien's λ = b/T, possibly off the grid) is 1."""
+    peak_nm = _WIEN_B / _kelvin(temperature) / _NM
+    return Spectrum(planck(GRID, temperature) / planck(peak_nm, temperature))
+
+
 @lru_cache(maxsize=None)
 def _illuminant(name: str) -> Spectrum:
     dataset = colorimetry.colour_science().SDS_ILLUMINANTS[name]
@@ -102,6 +225,49 @@ def illuminant(name: str) -> Spectrum:
     if canonical is None:
         raise SpectralError(f"unknown illuminant {name!r}; valid names: {', '.join(ILLUMINANT_NAMES)}")
     return _illuminant(canonical)
+
+
+def window(spectrum: Spectrum, lo: float, hi: float) -> Spectrum:
+    """`spectrum` between `lo` and `hi` nm (inclusive), 0 elsewhere."""
+    if not lo <= hi:
+        raise SpectralError(f"spectral window needs min ≤ max, got {lo:g}–{hi:g} nm")
+    return Spectrum(np.where((GRID >= lo) & (GRID <= hi), spectrum.values, 0.0))
+
+
+def _rgb_triple(rgb) -> tuple[float, float, float]:
+    try:
+        values = np.asarray(rgb, dtype=np.float64)
+    except (TypeError, ValueError):
+        values = None
+    if values is None or values.shape != (3,) or not np.all(np.isfinite(values)):
+        raise SpectralError(f"an RGB colour is three finite numbers, got {rgb!r}")
+    if np.any((values < 0) | (values > 1)):
+        raise SpectralError(f"a reflectance RGB colour needs components in [0, 1], got {values.tolist()}")
+    return tuple(values.tolist())
+
+
+def from_rgb(rgb, method: str = "jakob2019") -> Spectrum:
+    """A smooth reflectance spectrum in [0, 1] whose colour under D65 is `rgb` (linear Rec.709, in [0, 1]).
+
+    `method` (see RGB_METHODS): "jakob2019" (Jakob & Hanika 2019 sigmoid polynomial) or "otsu2018", both
+    from colour-science's `colour.recovery`. The fit spans 360–830 nm (Otsu: 380–730 nm); beyond it the
+    value at its end is held."""
+    if method not in RGB_METHODS:
+        raise SpectralError(f"unknown RGB-to-spectrum method {method!r}; choose one of {', '.join(RGB_METHODS)}")
+    return _from_rgb(_rgb_triple(rgb), method)
+
+
+@lru_cache(maxsize=1024)
+def _from_rgb(rgb: tuple[float, float, float], method: str) -> Spectrum:
+    colour = colorimetry.colour_science()
+    observer = colorimetry.cie1931_observer()
+    d65 = colour.SpectralDistribution(illuminant("D65")(observer.wavelengths), observer.wavelengths)
+    with warnings.catch_warnings():
+        # Otsu 2018 resamples to its dataset's 380–730 nm, 10 nm shape and warns about it on every call.
+        warnings.simplefilter("ignore", colour.utilities.ColourRuntimeWarning)
+        recovered = colour.XYZ_to_sd(colorimetry.rgb_to_xyz(rgb, "rec709"), method=RGB_METHODS[method],
+                                     cmfs=observer, illuminant=d65)
+    return Spectrum(np.clip(np.interp(GRID, recovered.wavelengths, recovered.values), 0.0, 1.0))
 
 
 def from_spec(spec, name: str = "spectrum") -> Spectrum:
