@@ -2,8 +2,8 @@
 
 A `Spectrum` is immutable and holds `GRID.size` float64 values (see `wavelengths`). Sources: constant,
 (λ, value) table, CSV file, Gaussian, Planck blackbody, CIE standard illuminants, and a smooth reflectance
-for an RGB colour; operations: λ window, scale and sum; and the scene format's JSON description
-(`from_spec`).
+for an RGB colour; operations: λ window, scale and sum. `from_spec` builds any of these from the scene
+format's JSON description and `to_spec` writes one back.
 
 Resampling onto GRID is linear interpolation; a tabulated source (table, CSV file, illuminant dataset)
 is 0 outside the wavelength range it covers.
@@ -27,6 +27,7 @@ ILLUMINANT_NAMES = (
     *(f"FL{i}" for i in range(1, 13)),
     "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2",
 )
+SPEC_TYPES = ("constant", "table", "gaussian", "blackbody", "illuminant", "csv", "window", "scale", "sum")
 RGB_METHODS = {"jakob2019": "Jakob 2019", "otsu2018": "Otsu 2018"}
 # Wavelength units a CSV file may be in, as nanometres per unit.
 CSV_UNITS = {"nm": 1.0, "um": 1e3, "µm": 1e3, "μm": 1e3, "A": 0.1, "Å": 0.1}
@@ -270,20 +271,84 @@ def _from_rgb(rgb: tuple[float, float, float], method: str) -> Spectrum:
     return Spectrum(np.clip(np.interp(GRID, recovered.wavelengths, recovered.values), 0.0, 1.0))
 
 
-def from_spec(spec, name: str = "spectrum") -> Spectrum:
-    """Build a spectrum from its scene-format description (a number or a dict with a "type")."""
-    if isinstance(spec, (int, float)) and not isinstance(spec, bool):
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _field(spec: dict, key: str, name: str, default=None):
+    if key not in spec:
+        if default is not None:
+            return default
+        raise SpectralError(f"{name}: spectrum of type {spec['type']!r} needs the field {key!r}")
+    return spec[key]
+
+
+def _number(spec: dict, key: str, name: str, default=None) -> float:
+    value = _field(spec, key, name, default)
+    if not _is_number(value):
+        raise SpectralError(f"{name}: field {key!r} of a spectrum of type {spec['type']!r} must be a number, "
+                            f"got {value!r}")
+    return float(value)
+
+
+def _text(spec: dict, key: str, name: str, default=None) -> str:
+    value = _field(spec, key, name, default)
+    if not isinstance(value, str):
+        raise SpectralError(f"{name}: field {key!r} of a spectrum of type {spec['type']!r} must be text, "
+                            f"got {value!r}")
+    return value
+
+
+def _csv_path(spec: dict, name: str, base_dir) -> Path:
+    path = Path(_text(spec, "path", name))
+    return path if base_dir is None or path.is_absolute() else Path(base_dir) / path
+
+
+def _sum(spec: dict, name: str, base_dir) -> Spectrum:
+    parts = _field(spec, "of", name)
+    if not isinstance(parts, list) or not parts:
+        raise SpectralError(f"{name}: field 'of' of a 'sum' spectrum must be a non-empty list of spectra")
+    spectra = [from_spec(part, f"{name}.of[{i}]", base_dir=base_dir) for i, part in enumerate(parts)]
+    return Spectrum(np.sum([spectrum.values for spectrum in spectra], axis=0))
+
+
+def _build(spec: dict, name: str, base_dir) -> Spectrum:
+    def inner():
+        return from_spec(_field(spec, "of", name), f"{name}.of", base_dir=base_dir)
+
+    match spec["type"]:
+        case "constant":
+            return constant(_number(spec, "value", name))
+        case "table":
+            return table(_field(spec, "wavelengths", name), _field(spec, "values", name), name)
+        case "gaussian":
+            return gaussian(_number(spec, "peak", name), _number(spec, "width", name),
+                            _number(spec, "height", name, default=1.0))
+        case "blackbody":
+            return blackbody(_number(spec, "temperature", name))
+        case "illuminant":
+            return illuminant(_text(spec, "name", name))
+        case "csv":
+            return from_csv(_csv_path(spec, name, base_dir), _text(spec, "units", name, default="nm"))
+        case "window":
+            return window(inner(), _number(spec, "min", name), _number(spec, "max", name))
+        case "scale":
+            return inner() * _number(spec, "factor", name)
+        case "sum":
+            return _sum(spec, name, base_dir)
+    raise SpectralError(f"{name}: unknown spectrum type {spec['type']!r}; known types: {', '.join(SPEC_TYPES)}")
+
+
+def from_spec(spec, name: str = "spectrum", *, base_dir=None) -> Spectrum:
+    """Build a spectrum from its scene-format description: a number (a constant) or a dict whose "type" is
+    one of SPEC_TYPES. A relative csv "path" is taken relative to `base_dir` (the scene file's folder)."""
+    if _is_number(spec):
         return constant(spec)
     if not isinstance(spec, dict) or "type" not in spec:
         raise SpectralError(f"{name}: a spectrum is a number or an object with a \"type\", got {spec!r}")
-    kind = spec["type"]
-    try:
-        if kind == "constant":
-            return constant(spec["value"])
-        if kind == "table":
-            return table(spec["wavelengths"], spec["values"], name)
-        if kind == "gaussian":
-            return gaussian(spec["peak"], spec["width"], spec.get("height", 1.0))
-    except KeyError as missing:
-        raise SpectralError(f"{name}: spectrum of type {kind!r} needs the field {missing}") from None
-    raise SpectralError(f"{name}: unknown spectrum type {kind!r}")
+    return _build(spec, name, base_dir)
+
+
+def to_spec(spectrum: Spectrum) -> dict:
+    """Scene-format description of `spectrum`: its grid values as a "table" (from_spec restores it exactly)."""
+    return {"type": "table", "wavelengths": GRID.tolist(), "values": spectrum.values.tolist()}

@@ -1,5 +1,6 @@
 """Spectra: every source and operation, the CSV reader's checks, and the scene-format round trip."""
 
+import json
 import time
 
 import numpy as np
@@ -159,6 +160,61 @@ def test_window_scale_and_sum():
     assert np.array_equal((band + one).values, band.values + 1.0)
     with pytest.raises(SpectralError, match="min ≤ max"):
         spectra.window(one, 600, 500)
+
+
+# --- scene format --------------------------------------------------------------------------------------------
+
+def test_from_spec_every_type(tmp_path):
+    (tmp_path / "data").mkdir()
+    write(tmp_path / "data", "400,1\n600,1\n", "leaf.csv")
+    cases = [
+        (0.5, spectra.constant(0.5)),
+        ({"type": "constant", "value": 2}, spectra.constant(2)),
+        ({"type": "table", "wavelengths": [400, 500], "values": [0, 1]}, spectra.table([400, 500], [0, 1])),
+        ({"type": "gaussian", "peak": 550, "width": 20}, spectra.gaussian(550, 20)),
+        ({"type": "gaussian", "peak": 550, "width": 20, "height": 3}, spectra.gaussian(550, 20, 3)),
+        ({"type": "blackbody", "temperature": 3000}, spectra.blackbody(3000)),
+        ({"type": "illuminant", "name": "FL2"}, spectra.illuminant("FL2")),
+        ({"type": "csv", "path": "data/leaf.csv"}, spectra.table([400, 600], [1, 1])),
+        ({"type": "csv", "path": str(tmp_path / "data" / "leaf.csv"), "units": "nm"},
+         spectra.table([400, 600], [1, 1])),
+        ({"type": "window", "of": 1, "min": 450, "max": 460}, spectra.window(spectra.constant(1), 450, 460)),
+        ({"type": "scale", "of": {"type": "illuminant", "name": "A"}, "factor": 0.5}, 0.5 * spectra.illuminant("A")),
+        ({"type": "sum", "of": [1, {"type": "gaussian", "peak": 500, "width": 5}]},
+         spectra.constant(1) + spectra.gaussian(500, 5)),
+    ]
+    for spec, expected in cases:
+        assert np.array_equal(spectra.from_spec(spec, base_dir=tmp_path).values, expected.values), spec
+
+
+BAD_SPECS = {
+    "not a spectrum": ("red", r"light\.colour: a spectrum is a number or an object"),
+    "unknown type": ({"type": "rgb"}, r"unknown spectrum type 'rgb'; known types: constant, table"),
+    "missing field": ({"type": "gaussian", "peak": 500}, r"type 'gaussian' needs the field 'width'"),
+    "text for number": ({"type": "constant", "value": "1"},
+                        r"field 'value' of a spectrum of type 'constant' must be a number"),
+    "bool for number": ({"type": "blackbody", "temperature": True}, r"'temperature' .* must be a number"),
+    "number for text": ({"type": "illuminant", "name": 65},
+                        r"field 'name' of a spectrum of type 'illuminant' must be text"),
+    "empty sum": ({"type": "sum", "of": []}, r"'of' of a 'sum' spectrum must be a non-empty list"),
+    "nested error": ({"type": "sum", "of": [1, {"type": "scale", "of": {"type": "x"}, "factor": 2}]},
+                     r"light\.colour\.of\[1\]\.of: unknown spectrum type 'x'"),
+    "missing csv": ({"type": "csv", "path": "nowhere.csv"}, r"cannot read spectrum file .*nowhere.csv"),
+}
+
+
+@pytest.mark.parametrize("case", BAD_SPECS)
+def test_from_spec_errors_name_the_spectrum_and_the_problem(tmp_path, case):
+    spec, message = BAD_SPECS[case]
+    with pytest.raises(SpectralError, match=message):
+        spectra.from_spec(spec, "light.colour", base_dir=tmp_path)
+
+
+def test_to_spec_round_trips_exactly_through_json():
+    original = spectra.illuminant("D65") + spectra.blackbody(2700) * 3.7 + spectra.gaussian(432.1, 7.3)
+    spec = json.loads(json.dumps(spectra.to_spec(original)))
+    assert spec["type"] == "table"
+    assert np.array_equal(spectra.from_spec(spec).values, original.values)
 
 
 # --- RGB to spectrum -----------------------------------------------------------------------------------------
