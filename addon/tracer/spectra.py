@@ -19,6 +19,7 @@ import numpy as np
 import scipy.constants
 
 from . import colorimetry
+from .planck import planck_radiance
 from .errors import SpectralError
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
@@ -33,8 +34,6 @@ RGB_METHODS = {"jakob2019": "Jakob 2019", "otsu2018": "Otsu 2018"}
 CSV_UNITS = {"nm": 1.0, "um": 1e3, "µm": 1e3, "μm": 1e3, "A": 0.1, "Å": 0.1}
 
 _NM = 1e-9  # metres
-_PLANCK_C1 = 2 * scipy.constants.h * scipy.constants.c**2  # W·m²·sr⁻¹
-_PLANCK_C2 = scipy.constants.h * scipy.constants.c / scipy.constants.k  # m·K
 _WIEN_B = scipy.constants.Wien  # m·K
 
 
@@ -183,11 +182,6 @@ def from_csv(path, units: str = "nm") -> Spectrum:
     return table(np.array(wavelengths) * scale, values, name=str(path))
 
 
-def _log_expm1(x):
-    """log(eˣ − 1) for x > 0 without overflow."""
-    return x + np.log1p(-np.exp(-x))
-
-
 def _kelvin(temperature) -> np.ndarray:
     temperature = np.asarray(temperature, dtype=np.float64)
     bad = ~(np.isfinite(temperature) & (temperature > 0))
@@ -199,10 +193,7 @@ def _kelvin(temperature) -> np.ndarray:
 def planck(lam, temperature):
     """Planck's law: black-body spectral radiance in W·sr⁻¹·m⁻²·nm⁻¹ at wavelength(s) `lam` (nm) and
     temperature(s) in kelvin; the two broadcast against each other. Underflows to 0, never overflows."""
-    lam_m = np.asarray(lam, dtype=np.float64) * _NM
-    x = _PLANCK_C2 / (lam_m * _kelvin(temperature))
-    per_metre = np.exp(np.log(_PLANCK_C1) - 5 * np.log(lam_m) - _log_expm1(x))
-    return per_metre * _NM
+    return planck_radiance(np.asarray(lam, dtype=np.float64), _kelvin(temperature))
 
 
 def blackbody(temperature: float) -> Spectrum:
