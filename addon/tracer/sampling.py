@@ -1,0 +1,275 @@
+"""Wavelength sampling: every pdf over λ the tracer draws wavelengths from, and the draws themselves.
+
+For the kernels every sampler is a `BinnedDistribution`: a density that is constant over each 1 nm bin
+[GRID[i], GRID[i+1]) of the shared grid (580 bins from 250 nm), stored as `cdf` (581 values, 0 … 1) and
+`bin_pdf` (580 values, density per nm). The kernel-facing functions take those two arrays:
+
+    sample_binned(cdf, u) -> lam                 u in [0, 1)
+    pdf_binned(bin_pdf, lam) -> pdf              0 outside the grid
+    stratified_binned(cdf, bin_pdf, u, n) -> (lams, pdfs)
+
+They are plain functions of arrays (the NumPy backend calls them on arrays of paths) and compile unchanged
+with Numba (`*_jit`, or `numba.njit(fn)` in a kernel; there they are called with one path's scalars).
+
+The seminar report's samplers (§3.2) are here too: uniform over 380–700 nm, D65 by rejection sampling
+(`d65_rejection`, with its pdf) and the UV-extended range; plus the mixture of the lights' spectra, the
+visible-range importance density, and the split of a range into bands for per-wavelength passes.
+"""
+
+import functools
+
+import numba
+import numpy as np
+from numba.extending import register_jitable
+
+from .errors import SpectralError
+from .spectra import Spectrum, table
+from .wavelengths import (
+    GRID,
+    LAMBDA_MAX,
+    LAMBDA_MIN,
+    REPORT_VISIBLE_MAX,
+    REPORT_VISIBLE_MIN,
+    UV_MAX,
+    VISIBLE_MAX,
+    VISIBLE_MIN,
+)
+
+BINS = GRID.size - 1
+
+# u is clamped into [0, 1) (a generator's u = 1 would land past the last non-empty bin), and the
+# position inside a bin stays below 1 by more than the float spacing at 830 nm (~1e-13), so a sample
+# never rounds up onto the next bin's left edge (which may have pdf 0).
+_U_MAX = 1.0 - 2.0**-53
+_T_MAX = 1.0 - 2.0**-30
+
+
+@register_jitable
+def sample_binned(cdf, u):
+    """Wavelength (nm) with the piecewise-constant density of `cdf` (581 values on GRID), by inversion.
+
+    `cdf` rises from 0 to exactly 1 (as `BinnedDistribution` makes it); `u` in [0, 1) is a scalar or an
+    array of paths. Bins of zero weight are never returned."""
+    u = np.minimum(np.maximum(u, 0.0), _U_MAX)
+    i = np.searchsorted(cdf, u, side="right") - 1
+    # A no-op for such a cdf; keeps Numba (which does not check bounds) inside the arrays for any other.
+    i = np.minimum(np.maximum(i, 0), cdf.size - 2)
+    c0 = cdf[i]
+    t = (u - c0) / np.maximum(cdf[i + 1] - c0, 1e-300)
+    return LAMBDA_MIN + i + np.minimum(np.maximum(t, 0.0), _T_MAX)
+
+
+@register_jitable
+def pdf_binned(bin_pdf, lam):
+    """Density per nm at wavelength(s) `lam` of the bins `bin_pdf` (580 values on GRID); 0 off the grid."""
+    x = lam - LAMBDA_MIN
+    i = np.int64(np.minimum(np.maximum(np.floor(x), 0.0), bin_pdf.size - 1.0))
+    return bin_pdf[i] * ((x >= 0.0) & (x < bin_pdf.size))
+
+
+@register_jitable
+def stratified_binned(cdf, bin_pdf, u, n):
+    """Hero wavelength and n−1 rotated companions: u_i = (u + i/n) mod 1, λ_i = sample_binned(cdf, u_i).
+
+    Returns (lams, pdfs), each of shape (n,) + shape(u): for one path (Numba) two arrays of n values,
+    for m paths (NumPy) two (n, m) arrays. Each u_i is uniform, so each λ_i is marginally distributed
+    with density pdf(λ_i): the spectral estimator averages f(λ_i) / pdf(λ_i) over i (or weights them
+    by spectral MIS); the n draws are stratified in u, which lowers the colour noise."""
+    lams = np.empty((n,) + np.shape(u))
+    pdfs = np.empty((n,) + np.shape(u))
+    for i in range(n):
+        lam = sample_binned(cdf, (u + i / n) % 1.0)
+        lams[i] = lam
+        pdfs[i] = pdf_binned(bin_pdf, lam)
+    return lams, pdfs
+
+
+sample_binned_jit = numba.njit(sample_binned, cache=True)
+pdf_binned_jit = numba.njit(pdf_binned, cache=True)
+stratified_binned_jit = numba.njit(stratified_binned, cache=True)
+
+
+def _check_range(lo, hi):
+    """(lo, hi) as whole nanometres within the grid, lo < hi."""
+    try:
+        lo_i, hi_i = int(lo), int(hi)
+    except (TypeError, ValueError, OverflowError):
+        raise SpectralError(f"wavelength range {lo!r}–{hi!r} nm must be two numbers") from None
+    if lo_i != lo or hi_i != hi:
+        raise SpectralError(f"wavelength range {lo:g}–{hi:g} nm must start and end on whole nanometres")
+    if not (LAMBDA_MIN <= lo_i < hi_i <= LAMBDA_MAX):
+        raise SpectralError(
+            f"wavelength range {lo_i}–{hi_i} nm must be increasing and lie within {LAMBDA_MIN:g}–{LAMBDA_MAX:g} nm"
+        )
+    return lo_i, hi_i
+
+
+def _bin_weights(spectrum: Spectrum) -> np.ndarray:
+    """Integral of the (piecewise-linear) spectrum over each 1 nm bin: the mean of its two end values."""
+    return 0.5 * (spectrum.values[:-1] + spectrum.values[1:])
+
+
+class BinnedDistribution:
+    """A piecewise-constant pdf over the 1 nm bins of GRID, zero outside [lo, hi) nm.
+
+    `weights` holds one number per bin (580); only the bins inside [lo, hi) count (non-negative), and
+    the pdf is proportional to them. `what` names the weights in the error raised when they are all zero.
+    """
+
+    def __init__(self, weights, lo, hi, what="wavelength weights"):
+        self.lo, self.hi = _check_range(lo, hi)
+        weights = np.asarray(weights, dtype=np.float64)
+        if weights.shape != (BINS,):
+            raise SpectralError(f"{what}: need {BINS} values, one per 1 nm bin, got shape {weights.shape}")
+        inside = np.zeros(BINS)
+        start, stop = self.lo - int(LAMBDA_MIN), self.hi - int(LAMBDA_MIN)
+        inside[start:stop] = weights[start:stop]
+        if not np.all(np.isfinite(inside)) or np.any(inside < 0):
+            raise SpectralError(f"{what} must be finite and non-negative in {self.lo}–{self.hi} nm")
+        cumulative = np.cumsum(inside)
+        total = cumulative[-1]
+        if not total > 0:
+            raise SpectralError(f"{what} are zero in {self.lo}–{self.hi} nm")
+        self.bin_pdf = inside / total
+        self.cdf = np.concatenate(([0.0], cumulative / total))
+        for array in (self.bin_pdf, self.cdf):
+            array.flags.writeable = False
+
+    def sample(self, u):
+        """Wavelength(s) in nm for uniform number(s) `u` in [0, 1)."""
+        return sample_binned(self.cdf, np.asarray(u, dtype=np.float64))
+
+    def pdf(self, lam):
+        """Density per nm at wavelength(s) `lam`."""
+        return pdf_binned(self.bin_pdf, np.asarray(lam, dtype=np.float64))
+
+
+def uniform(lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> BinnedDistribution:
+    """Uniform over [lo, hi) nm; the default is the report's visible range (sampleWavelength)."""
+    return BinnedDistribution(np.ones(BINS), lo, hi)
+
+
+def uv_extended(lo=LAMBDA_MIN, hi=REPORT_VISIBLE_MAX) -> BinnedDistribution:
+    """The report's sampleWavelengthUV: uniform over a range reaching below 380 nm into the UV."""
+    lo, hi = _check_range(lo, hi)
+    if not lo < UV_MAX:
+        raise SpectralError(f"a UV-extended wavelength range must start below {UV_MAX:g} nm, got {lo} nm")
+    return uniform(lo, hi)
+
+
+def from_spectrum(spectrum: Spectrum, lo=VISIBLE_MIN, hi=VISIBLE_MAX, name="the spectrum") -> BinnedDistribution:
+    """Proportional to `spectrum` over [lo, hi) nm (bin weight = mean of the bin's two end values)."""
+    return BinnedDistribution(_bin_weights(spectrum), lo, hi, what=name)
+
+
+def composite_light_distribution(pairs, lo=VISIBLE_MIN, hi=VISIBLE_MAX) -> BinnedDistribution:
+    """The mixture Σ_k w_k p_k(λ) / Σ_k w_k of the lights' spectra, for `pairs` of (Spectrum, power weight).
+
+    p_k is light k's spectrum normalised over [lo, hi): only its shape counts, and w_k is its share of
+    the emitted power in that range. A light whose spectrum is zero there adds nothing."""
+    lo, hi = _check_range(lo, hi)
+    bins = slice(lo - int(LAMBDA_MIN), hi - int(LAMBDA_MIN))
+    mixture = np.zeros(BINS)
+    for spectrum, weight in pairs:
+        weight = float(weight)
+        if not (np.isfinite(weight) and weight >= 0):
+            raise SpectralError(f"a light's power weight must be finite and non-negative, got {weight}")
+        shape = _bin_weights(spectrum)[bins]
+        if np.any(shape < 0):
+            raise SpectralError(f"light spectra must be non-negative in {lo}–{hi} nm")
+        if shape.sum() > 0:
+            mixture[bins] += weight * shape / shape.sum()
+    return BinnedDistribution(mixture, lo, hi, what="light spectra")
+
+
+# pbrt-v4's visible-wavelength importance density is proportional to 1 / cosh²(A (λ − C)).
+_VISIBLE_A = 0.0072
+_VISIBLE_C = 538.0
+
+
+def visible_distribution(lo=VISIBLE_MIN, hi=VISIBLE_MAX) -> BinnedDistribution:
+    """Importance for the visible range: 1/cosh²(0.0072 (λ − 538)) (pbrt-v4's published shape), with each
+    bin weighted by its exact integral tanh(A (λ − C)) / A between the bin's edges."""
+    antiderivative = np.tanh(_VISIBLE_A * (GRID - _VISIBLE_C)) / _VISIBLE_A
+    return BinnedDistribution(np.diff(antiderivative), lo, hi, what="the visible importance density")
+
+
+def stratified_wavelengths(dist: BinnedDistribution, u, n=4):
+    """Hero wavelength and n−1 rotated companions drawn from `dist` (see `stratified_binned`)."""
+    if int(n) != n or n < 1:
+        raise SpectralError(f"wavelengths per path must be a positive whole number, got {n}")
+    return stratified_binned(dist.cdf, dist.bin_pdf, np.asarray(u, dtype=np.float64), int(n))
+
+
+def band_ranges(lo, hi, bands):
+    """Split [lo, hi] nm into `bands` contiguous whole-nm bands whose widths differ by at most 1 nm."""
+    lo, hi = _check_range(lo, hi)
+    if int(bands) != bands or not 1 <= bands <= hi - lo:
+        raise SpectralError(f"{lo}–{hi} nm can be split into 1 to {hi - lo} bands of whole nanometres, not {bands}")
+    edges = [lo + (k * (hi - lo)) // int(bands) for k in range(int(bands) + 1)]
+    return list(zip(edges[:-1], edges[1:]))
+
+
+# --- Rejection sampling, as in the report's sampleWavelengthD65 ---------------------------------------
+
+
+def rejection_sample(spectrum: Spectrum, n, rng: np.random.Generator, lo, hi, name="the spectrum") -> np.ndarray:
+    """`n` wavelengths with density ∝ `spectrum` on [lo, hi) nm: propose λ uniformly, accept with
+    probability S(λ) / max S. Its pdf is `rejection_pdf`."""
+    lo, hi = _check_range(lo, hi)
+    knots = spectrum.values[lo - int(LAMBDA_MIN) : hi - int(LAMBDA_MIN) + 1]
+    peak = knots.max()  # a piecewise-linear spectrum peaks at a grid point
+    if np.any(knots < 0):
+        raise SpectralError(f"{name} must be non-negative in {lo}–{hi} nm to be sampled")
+    if not peak > 0:
+        raise SpectralError(f"{name} is zero in {lo}–{hi} nm")
+    acceptance = np.trapezoid(knots) / (peak * (hi - lo))
+    out = np.empty(int(n))
+    filled = 0
+    while filled < out.size:
+        proposals = rng.uniform(lo, hi, size=int((out.size - filled) / acceptance * 1.1) + 16)
+        accepted = proposals[rng.uniform(0.0, peak, size=proposals.size) < spectrum(proposals)]
+        take = min(accepted.size, out.size - filled)
+        out[filled : filled + take] = accepted[:take]
+        filled += take
+    return out
+
+
+def rejection_pdf(spectrum: Spectrum, lam, lo, hi) -> np.ndarray:
+    """Density per nm of `rejection_sample`: S(λ) / ∫_lo^hi S on [lo, hi), else 0."""
+    lo, hi = _check_range(lo, hi)
+    lam = np.asarray(lam, dtype=np.float64)
+    total = np.trapezoid(spectrum.values[lo - int(LAMBDA_MIN) : hi - int(LAMBDA_MIN) + 1])
+    return np.where((lam >= lo) & (lam < hi), spectrum(lam) / total, 0.0)
+
+
+@functools.cache
+def d65_spectrum() -> Spectrum:
+    """CIE standard illuminant D65 on the grid (relative SPD, 100 at 560 nm; 0 below 300 nm).
+
+    colour-science's D65 table stops at 780 nm; 785–830 nm come from the CIE daylight (D-series) formula
+    at D65's chromaticity, which agrees with the table to 0.15 (0.2 %) over 700–780 nm."""
+    import colour  # slow to import; only needed here
+
+    d65 = colour.SDS_ILLUMINANTS["D65"]
+    xy = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    daylight = colour.sd_CIE_illuminant_D_series(xy)
+    tail = daylight.wavelengths[daylight.wavelengths > d65.wavelengths[-1]]
+    wavelengths = np.concatenate((d65.wavelengths, tail))
+    values = np.concatenate((d65.values, daylight[tail]))
+    return table(wavelengths, values, "D65")
+
+
+def d65_rejection(n, rng: np.random.Generator, lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> np.ndarray:
+    """The report's sampleWavelengthD65: `n` wavelengths ∝ D65 on [lo, hi) by rejection sampling."""
+    return rejection_sample(d65_spectrum(), n, rng, lo, hi, name="D65")
+
+
+def d65_rejection_pdf(lam, lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> np.ndarray:
+    """Density per nm of `d65_rejection`: D65 normalised over [lo, hi)."""
+    return rejection_pdf(d65_spectrum(), lam, lo, hi)
+
+
+def d65(lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> BinnedDistribution:
+    """D65 as a binned pdf for the kernels: the same bin probabilities as `d65_rejection`."""
+    return from_spectrum(d65_spectrum(), lo, hi, name="D65")

@@ -1,0 +1,219 @@
+"""Wavelength samplers against their pdfs (Pearson chi-square), the kernels' NumPy and Numba forms, bad input.
+
+Every chi-square test uses a fixed seed and passes when p > 1e-3: for a correct sampler p is uniform on
+[0, 1], so a seed would fail with probability 1e-3; the deliberately wrong pdfs give p far below 1e-30.
+"""
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+from addon.tracer import sampling
+from addon.tracer.errors import SpectralError
+from addon.tracer.spectra import constant, gaussian, table
+from addon.tracer.wavelengths import GRID
+
+P_MIN = 1e-3
+N = 200_000
+UV_ONLY = table([250, 350], [1.0, 1.0])  # exactly zero above 350 nm
+
+
+def chi_square_pvalue(samples, edges, probabilities):
+    """p-value of Pearson's chi-square test of `samples` binned on `edges` against the bins' probabilities;
+    adjacent bins are pooled until each pool expects at least 5 samples."""
+    observed = np.histogram(samples, edges)[0]
+    assert observed.sum() == samples.size, "samples outside the tested range"
+    expected = probabilities * samples.size
+    pools_o, pools_e, o, e = [], [], 0.0, 0.0
+    for oi, ei in zip(observed, expected):
+        o, e = o + oi, e + ei
+        if e >= 5:
+            pools_o.append(o)
+            pools_e.append(e)
+            o, e = 0.0, 0.0
+    pools_o[-1] += o
+    pools_e[-1] += e
+    pools_o, pools_e = np.array(pools_o), np.array(pools_e)
+    statistic = np.sum((pools_o - pools_e) ** 2 / pools_e)
+    return stats.chi2.sf(statistic, pools_o.size - 1)
+
+
+def quarter_nm_test(samples, pdf, lo, hi):
+    """Chi-square over 0.25 nm bins of [lo, hi], the probability of each bin from `pdf` (constant per nm)."""
+    edges = np.arange(lo, hi + 0.125, 0.25)
+    return chi_square_pvalue(samples, edges, pdf(edges[:-1] + 0.125) * 0.25)
+
+
+DISTRIBUTIONS = {
+    "uniform report range": lambda: sampling.uniform(),
+    "uniform whole grid": lambda: sampling.uniform(250, 830),
+    "uv extended": lambda: sampling.uv_extended(),
+    "gaussian spectrum": lambda: sampling.from_spectrum(gaussian(450, 30), 360, 830),
+    "visible": lambda: sampling.visible_distribution(),
+    "d65 binned": lambda: sampling.d65(360, 830),
+    "two lights": lambda: sampling.composite_light_distribution([(gaussian(420, 10), 1.0), (constant(2.0), 3.0)]),
+}
+
+
+@pytest.mark.parametrize("name", DISTRIBUTIONS)
+def test_binned_sampler_matches_its_pdf(name):
+    dist = DISTRIBUTIONS[name]()
+    assert dist.cdf.shape == (GRID.size,) and dist.bin_pdf.shape == (GRID.size - 1,)
+    assert dist.cdf[0] == 0.0 and dist.cdf[-1] == 1.0 and np.all(np.diff(dist.cdf) >= 0)
+    assert dist.bin_pdf.sum() == pytest.approx(1.0, abs=1e-12)  # bins are 1 nm wide
+    samples = dist.sample(np.random.default_rng(1).random(N))
+    assert np.all(dist.pdf(samples) > 0)
+    assert quarter_nm_test(samples, dist.pdf, dist.lo, dist.hi) > P_MIN
+
+
+def test_pdf_is_zero_outside_its_range_and_the_grid():
+    dist = sampling.uniform(400, 500)
+    assert np.all(dist.bin_pdf[:150] == 0) and np.all(dist.bin_pdf[250:] == 0)
+    assert np.all(dist.pdf([399.99, 500.0, 249.0, 830.0, 900.0]) == 0)
+    assert np.all(dist.pdf([400.0, 450.5, 499.999]) == pytest.approx(0.01))
+
+
+def test_only_the_range_is_read():
+    spectrum = table([250, 399, 400, 830], [-5.0, -5.0, 1.0, 1.0])  # negative below 399 nm: outside the range
+    assert np.all(sampling.from_spectrum(spectrum, 400, 830).bin_pdf[150:] == 1 / 430)
+
+
+def test_wrong_pdfs_are_rejected():
+    uniform_samples = sampling.uniform(360, 830).sample(np.random.default_rng(2).random(N))
+    assert quarter_nm_test(uniform_samples, sampling.visible_distribution().pdf, 360, 830) < 1e-30
+    # A 3 nm shift of a 40 nm wide Gaussian: the mean moves by 34 standard errors (40 / √N nm).
+    samples = sampling.from_spectrum(gaussian(550, 40), 360, 830).sample(np.random.default_rng(3).random(N))
+    assert quarter_nm_test(samples, sampling.from_spectrum(gaussian(553, 40), 360, 830).pdf, 360, 830) < 1e-30
+
+
+def test_samples_stay_in_non_empty_bins_at_the_ends_of_u():
+    dist = sampling.from_spectrum(gaussian(600, 2), 300, 700)  # most bins hold (almost) nothing
+    u = np.array([0.0, 1e-300, 0.5, 1.0 - 2.0**-53, 1.0])
+    lam = dist.sample(u)
+    assert np.all(dist.pdf(lam) > 0) and np.all((lam >= 300) & (lam < 700))
+
+
+def test_uniform_within_each_bin():
+    dist = sampling.uniform(500, 501)
+    assert np.array_equal(dist.sample(np.array([0.0, 0.25, 0.5])), [500.0, 500.25, 500.5])
+
+
+def test_visible_distribution_is_pbrts_density_per_bin():
+    dist = sampling.visible_distribution(360, 830)
+
+    def density(lam):
+        return 1.0 / np.cosh(0.0072 * (lam - 538.0)) ** 2
+
+    total = integrate.quad(density, 360, 830)[0]
+    for lam in (360, 437, 538, 700, 829):
+        assert dist.bin_pdf[lam - 250] == pytest.approx(integrate.quad(density, lam, lam + 1)[0] / total, rel=1e-10)
+
+
+def test_composite_is_the_power_weighted_mixture():
+    blue = gaussian(420, 5)  # its scale does not matter: only the shape and the power weight count
+    red = gaussian(650, 5, height=100.0)
+    dist = sampling.composite_light_distribution([(blue, 1.0), (red, 3.0), (constant(0.0), 5.0)], 360, 830)
+    assert dist.cdf[540 - 250] == pytest.approx(0.25, abs=1e-12)
+    only_blue = sampling.from_spectrum(blue, 360, 830)
+    assert np.allclose(dist.bin_pdf[: 540 - 250], 0.25 * only_blue.bin_pdf[: 540 - 250], rtol=1e-9, atol=1e-15)
+
+
+def test_d65_rejection_sampling_matches_its_pdf():
+    samples = sampling.d65_rejection(N, np.random.default_rng(4))
+    assert samples.size == N and np.all((samples >= 380) & (samples < 700))
+    # The pdf is linear between grid points, so the midpoint rule gives each half-nm bin's probability exactly.
+    edges = np.arange(380, 700.25, 0.5)
+    probabilities = sampling.d65_rejection_pdf(edges[:-1] + 0.25) * 0.5
+    assert probabilities.sum() == pytest.approx(1.0, abs=1e-12)
+    assert chi_square_pvalue(samples, edges, probabilities) > P_MIN
+    # ... and a flat pdf is rejected.
+    assert chi_square_pvalue(samples, edges, np.full(edges.size - 1, 1 / (edges.size - 1))) < 1e-30
+
+
+def test_d65_binned_has_the_rejection_samplers_bin_probabilities():
+    edges = np.arange(380, 701)
+    exact = [integrate.quad(sampling.d65_rejection_pdf, a, a + 1)[0] for a in edges[:-1]]
+    assert np.allclose(sampling.d65().bin_pdf[380 - 250 : 700 - 250], exact, rtol=1e-9)
+
+
+def test_d65_spectrum():
+    d65 = sampling.d65_spectrum()
+    assert d65(560) == pytest.approx(100.0)
+    assert d65(300) > 0 and d65(299) == 0 and np.all(d65.values[GRID >= 300] > 0)
+    assert d65(780) == pytest.approx(63.3828) and d65(830) > 0  # table end, then the daylight formula
+
+
+def test_rejection_sampling_of_any_spectrum():
+    spectrum = gaussian(300, 20) + constant(0.1)
+    samples = sampling.rejection_sample(spectrum, N, np.random.default_rng(5), 250, 400)
+    edges = np.arange(250, 400.25, 0.5)
+    probabilities = sampling.rejection_pdf(spectrum, edges[:-1] + 0.25, 250, 400) * 0.5
+    assert chi_square_pvalue(samples, edges, probabilities) > P_MIN
+
+
+@pytest.mark.parametrize("n", [1, 3, 4])
+def test_stratified_wavelengths_have_the_right_marginal_pdf(n):
+    dist = sampling.visible_distribution()
+    u = np.random.default_rng(6).random(N)
+    lams, pdfs = sampling.stratified_wavelengths(dist, u, n)
+    assert lams.shape == pdfs.shape == (n, N)
+    assert np.array_equal(pdfs, dist.pdf(lams))
+    for i in range(n):
+        assert np.array_equal(lams[i], dist.sample((u + i / n) % 1.0))
+        assert quarter_nm_test(lams[i], dist.pdf, dist.lo, dist.hi) > P_MIN
+
+
+def test_stratified_draws_are_one_in_each_stratum_of_u():
+    dist = sampling.uniform(400, 800)
+    lams, pdfs = sampling.stratified_wavelengths(dist, 0.3, 4)
+    assert lams.shape == pdfs.shape == (4,)
+    assert np.allclose(np.sort(lams), [420, 520, 620, 720]) and np.all(pdfs == 1 / 400)
+
+
+def test_numba_and_numpy_forms_agree_exactly():
+    dist = sampling.composite_light_distribution([(gaussian(420, 10), 1.0), (constant(1.0), 1.0)], 300, 800)
+    u = np.concatenate((np.random.default_rng(7).random(500), [0.0, 1.0 - 2.0**-53, 1.0]))
+    lam = np.concatenate((sampling.sample_binned(dist.cdf, u), [250.0, 299.999, 800.0, 829.9999, 830.0, 100.0]))
+    assert np.array_equal(sampling.sample_binned(dist.cdf, u), [sampling.sample_binned_jit(dist.cdf, x) for x in u])
+    pdfs = [sampling.pdf_binned_jit(dist.bin_pdf, x) for x in lam]
+    assert np.array_equal(sampling.pdf_binned(dist.bin_pdf, lam), pdfs)
+    lams, pdfs = sampling.stratified_binned(dist.cdf, dist.bin_pdf, u, 4)
+    for k, x in enumerate(u):
+        jit_lams, jit_pdfs = sampling.stratified_binned_jit(dist.cdf, dist.bin_pdf, x, 4)
+        assert np.array_equal(jit_lams, lams[:, k]) and np.array_equal(jit_pdfs, pdfs[:, k])
+
+
+def test_band_ranges():
+    assert sampling.band_ranges(360, 830, 1) == [(360, 830)]
+    bands = sampling.band_ranges(360, 830, 7)
+    assert len(bands) == 7 and bands[0][0] == 360 and bands[-1][1] == 830
+    assert all(a[1] == b[0] for a, b in zip(bands, bands[1:]))
+    assert {hi - lo for lo, hi in bands} <= {67, 68}
+    assert sampling.band_ranges(400, 410, 10) == [(400 + k, 401 + k) for k in range(10)]
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: sampling.composite_light_distribution([(constant(0.0), 1.0), (UV_ONLY, 2.0)]),
+         "light spectra are zero in 360–830 nm"),
+        (lambda: sampling.composite_light_distribution([]), "light spectra are zero in 360–830 nm"),
+        (lambda: sampling.composite_light_distribution([(constant(1.0), -1.0)]), "non-negative"),
+        (lambda: sampling.composite_light_distribution([(constant(-1.0), 1.0)]), "non-negative"),
+        (lambda: sampling.from_spectrum(UV_ONLY, 400, 830, name="emission"), "emission are zero in 400–830 nm"),
+        (lambda: sampling.BinnedDistribution(-np.ones(580), 400, 500), "non-negative"),
+        (lambda: sampling.BinnedDistribution(np.ones(10), 400, 500), "580 values"),
+        (lambda: sampling.uniform(200, 700), "within 250–830 nm"),
+        (lambda: sampling.uniform(700, 380), "increasing"),
+        (lambda: sampling.uniform(380.5, 700), "whole nanometres"),
+        (lambda: sampling.uniform("red", 700), "two numbers"),
+        (lambda: sampling.uv_extended(400, 700), "below 380 nm"),
+        (lambda: sampling.band_ranges(400, 410, 11), "1 to 10 bands"),
+        (lambda: sampling.band_ranges(400, 410, 0), "1 to 10 bands"),
+        (lambda: sampling.stratified_wavelengths(sampling.uniform(), 0.5, 0), "positive whole number"),
+        (lambda: sampling.rejection_sample(constant(0.0), 9, np.random.default_rng(), 380, 700), "is zero in 380–700"),
+    ],
+)
+def test_bad_input_raises_spectral_error(call, message):
+    with pytest.raises(SpectralError, match=message):
+        call()
