@@ -1,0 +1,120 @@
+"""Phase functions: Henyey–Greenstein, Rayleigh and isotropic, each with its pdf and its sampler.
+
+Conventions: directions are unit 3-vectors; cos_theta is the cosine between the incoming propagation
+direction and the outgoing propagation direction, so g > 0 scatters forward. Pdfs are per steradian.
+
+The kernel-facing functions are plain arithmetic on NumPy ufuncs, without branches on values: the NumPy
+backend calls them on arrays of paths, and they compile unchanged with Numba (`*_jit`, or `numba.njit(fn)`
+in a kernel) for one path's scalars. A direction is anything indexable by component, `w[0], w[1], w[2]`:
+a (3,) array or a 3-tuple for one path, a (3, m) array for m paths; directions are returned as 3-tuples
+(of scalars, or of (m,) arrays). `validate_g` checks anisotropy values before they reach a kernel.
+"""
+
+import numba
+import numpy as np
+from numba.extending import register_jitable
+
+from .errors import SpectralError
+
+INV_FOUR_PI = 1.0 / (4.0 * np.pi)
+
+
+def validate_g(values, name="Henyey–Greenstein anisotropy g"):
+    """`values` as a float64 array, or SpectralError unless every value lies strictly inside (−1, 1)."""
+    g = np.asarray(values, dtype=np.float64)
+    bad = ~(np.abs(g) < 1.0)  # also catches NaN
+    if np.any(bad):
+        raise SpectralError(f"{name} must lie strictly between -1 and 1, got {g[bad].flat[0]:g}")
+    return g
+
+
+@register_jitable
+def hg_pdf(g, cos_theta):
+    """Henyey–Greenstein phase function (1 − g²) / (4π (1 + g² − 2g cosθ)^{3/2}), per steradian."""
+    denom = 1.0 + g * g - 2.0 * g * cos_theta
+    return INV_FOUR_PI * (1.0 - g * g) / (denom * np.sqrt(denom))
+
+
+@register_jitable
+def hg_sample_cos(g, u):
+    """cosθ distributed as Henyey–Greenstein with anisotropy g, by exact inversion of its CDF (u in [0, 1)).
+
+    The textbook inverse (1 + g² − ((1 − g²) / (1 − g + 2gu))²) / (2g) divides a difference that
+    vanishes with g by g, which loses all precision as g → 0 (and is 0/0 at g = 0). With ξ = 2u − 1 the
+    same function reads  cosθ = ξ + g (1 − ξ²)(3 + 2gξ − g²) / (2 (1 + gξ)²):  algebraically identical,
+    no division by g, equal to the isotropic ξ at g = 0, and exactly ±1 at u = 0, 1. 1 − ξ² is computed as
+    4u(1 − u) to avoid cancellation near the poles; the result is clamped to [−1, 1] against rounding."""
+    xi = 2.0 * u - 1.0
+    d = 1.0 + g * xi
+    cos_theta = xi + g * (4.0 * u * (1.0 - u)) * (3.0 + 2.0 * g * xi - g * g) / (2.0 * d * d)
+    return np.minimum(np.maximum(cos_theta, -1.0), 1.0)
+
+
+@register_jitable
+def rayleigh_pdf(cos_theta):
+    """Rayleigh phase function 3 (1 + cos²θ) / (16π), per steradian."""
+    return 3.0 / (16.0 * np.pi) * (1.0 + cos_theta * cos_theta)
+
+
+@register_jitable
+def rayleigh_sample_cos(u):
+    """cosθ distributed as Rayleigh scattering, by exact inversion of its CDF (u in [0, 1)).
+
+    The CDF of μ = cosθ is (μ³ + 3μ + 4) / 8; setting it to u gives the depressed cubic μ³ + 3μ − 4ξ = 0
+    (ξ = 2u − 1), whose one real root (Cardano) is μ = A − 1/A with A = ∛(2ξ + √(1 + 4ξ²)). The root is
+    odd in ξ, so it is evaluated at |ξ| (A ≥ 1, no cancellation inside the cube root) and given ξ's sign."""
+    xi = 2.0 * u - 1.0
+    a = np.cbrt(2.0 * np.abs(xi) + np.sqrt(1.0 + 4.0 * xi * xi))
+    return np.minimum(np.copysign(a - 1.0 / a, xi), 1.0)
+
+
+@register_jitable
+def isotropic_pdf(cos_theta):
+    """Isotropic phase function 1 / (4π) per steradian (shaped like `cos_theta`)."""
+    return cos_theta * 0.0 + INV_FOUR_PI
+
+
+@register_jitable
+def isotropic_sample(u1, u2):
+    """Uniform direction on the unit sphere (pdf 1/(4π)): z = 1 − 2u1, azimuth 2πu2; returns (x, y, z)."""
+    z = 1.0 - 2.0 * u1
+    r = 2.0 * np.sqrt(u1 * (1.0 - u1))  # √(1 − z²) without cancellation at the poles
+    phi = 2.0 * np.pi * u2
+    return r * np.cos(phi), r * np.sin(phi), z
+
+
+@register_jitable
+def orthonormal_basis(n):
+    """Two unit vectors (t, b) with (t, b, n) a right-handed orthonormal frame, for unit `n`.
+
+    Duff et al. 2017, "Building an Orthonormal Basis, Revisited" (JCGT 6(1)): branch-free, using
+    copysign for the hemisphere of n's z, and continuous everywhere except across z = 0."""
+    x, y, z = n[0], n[1], n[2]
+    sign = np.copysign(1.0, z)
+    a = -1.0 / (sign + z)
+    b = x * y * a
+    return (1.0 + sign * x * x * a, sign * b, -sign * x), (b, sign + y * y * a, -y)
+
+
+@register_jitable
+def sample_direction(wi, cos_theta, u2):
+    """The outgoing direction at angle cos_theta to `wi` (both propagation directions), azimuth 2πu2."""
+    t, b = orthonormal_basis(wi)
+    sin_theta = np.sqrt(np.maximum((1.0 - cos_theta) * (1.0 + cos_theta), 0.0))
+    phi = 2.0 * np.pi * u2
+    st, sb = sin_theta * np.cos(phi), sin_theta * np.sin(phi)
+    return (
+        st * t[0] + sb * b[0] + cos_theta * wi[0],
+        st * t[1] + sb * b[1] + cos_theta * wi[1],
+        st * t[2] + sb * b[2] + cos_theta * wi[2],
+    )
+
+
+hg_pdf_jit = numba.njit(hg_pdf, cache=True)
+hg_sample_cos_jit = numba.njit(hg_sample_cos, cache=True)
+rayleigh_pdf_jit = numba.njit(rayleigh_pdf, cache=True)
+rayleigh_sample_cos_jit = numba.njit(rayleigh_sample_cos, cache=True)
+isotropic_pdf_jit = numba.njit(isotropic_pdf, cache=True)
+isotropic_sample_jit = numba.njit(isotropic_sample, cache=True)
+orthonormal_basis_jit = numba.njit(orthonormal_basis, cache=True)
+sample_direction_jit = numba.njit(sample_direction, cache=True)
