@@ -16,14 +16,12 @@ The seminar report's samplers (§3.2) are here too: uniform over 380–700 nm, D
 visible-range importance density, and the split of a range into bands for per-wavelength passes.
 """
 
-import functools
-
 import numba
 import numpy as np
 from numba.extending import register_jitable
 
 from .errors import SpectralError
-from .spectra import Spectrum, table
+from .spectra import Spectrum, illuminant
 from .wavelengths import (
     GRID,
     LAMBDA_MAX,
@@ -243,33 +241,18 @@ def rejection_pdf(spectrum: Spectrum, lam, lo, hi) -> np.ndarray:
     return np.where((lam >= lo) & (lam < hi), spectrum(lam) / total, 0.0)
 
 
-@functools.cache
-def d65_spectrum() -> Spectrum:
-    """CIE standard illuminant D65 on the grid (relative SPD, 100 at 560 nm; 0 below 300 nm).
-
-    colour-science's D65 table stops at 780 nm; 785–830 nm come from the CIE daylight (D-series) formula
-    at D65's chromaticity, which agrees with the table to 0.15 (0.2 %) over 700–780 nm."""
-    import colour  # slow to import; only needed here
-
-    d65 = colour.SDS_ILLUMINANTS["D65"]
-    xy = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
-    daylight = colour.sd_CIE_illuminant_D_series(xy)
-    tail = daylight.wavelengths[daylight.wavelengths > d65.wavelengths[-1]]
-    wavelengths = np.concatenate((d65.wavelengths, tail))
-    values = np.concatenate((d65.values, daylight[tail]))
-    return table(wavelengths, values, "D65")
-
-
 def d65_rejection(n, rng: np.random.Generator, lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> np.ndarray:
-    """The report's sampleWavelengthD65: `n` wavelengths ∝ D65 on [lo, hi) by rejection sampling."""
-    return rejection_sample(d65_spectrum(), n, rng, lo, hi, name="D65")
+    """The report's sampleWavelengthD65: `n` wavelengths ∝ D65 on [lo, hi) by rejection sampling.
+
+    D65 is `spectra.illuminant("D65")`, tabulated over 300–780 nm and 0 outside, so no samples fall there."""
+    return rejection_sample(illuminant("D65"), n, rng, lo, hi, name="D65")
 
 
 def d65_rejection_pdf(lam, lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> np.ndarray:
     """Density per nm of `d65_rejection`: D65 normalised over [lo, hi)."""
-    return rejection_pdf(d65_spectrum(), lam, lo, hi)
+    return rejection_pdf(illuminant("D65"), lam, lo, hi)
 
 
 def d65(lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> BinnedDistribution:
-    """D65 as a binned pdf for the kernels: the same bin probabilities as `d65_rejection`."""
-    return from_spectrum(d65_spectrum(), lo, hi, name="D65")
+    """D65 as a binned pdf for the kernels: the same bin probabilities as `d65_rejection` (0 above 780 nm)."""
+    return from_spectrum(illuminant("D65"), lo, hi, name="D65")

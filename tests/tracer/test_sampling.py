@@ -10,7 +10,7 @@ from scipy import integrate, stats
 
 from addon.tracer import sampling
 from addon.tracer.errors import SpectralError
-from addon.tracer.spectra import constant, gaussian, table
+from addon.tracer.spectra import constant, gaussian, illuminant, table
 from addon.tracer.wavelengths import GRID
 
 P_MIN = 1e-3
@@ -136,11 +136,10 @@ def test_d65_binned_has_the_rejection_samplers_bin_probabilities():
     assert np.allclose(sampling.d65().bin_pdf[380 - 250 : 700 - 250], exact, rtol=1e-9)
 
 
-def test_d65_spectrum():
-    d65 = sampling.d65_spectrum()
-    assert d65(560) == pytest.approx(100.0)
-    assert d65(300) > 0 and d65(299) == 0 and np.all(d65.values[GRID >= 300] > 0)
-    assert d65(780) == pytest.approx(63.3828) and d65(830) > 0  # table end, then the daylight formula
+def test_d65_pdf_is_the_shared_illuminant_normalised():
+    d65 = illuminant("D65")
+    assert sampling.d65_rejection_pdf(560.0) == pytest.approx(100.0 / np.trapezoid(d65.values[380 - 250 : 701 - 250]))
+    assert np.all(sampling.d65(360, 830).bin_pdf[781 - 250 :] == 0)  # the dataset ends at 780 nm
 
 
 def test_rejection_sampling_of_any_spectrum():
