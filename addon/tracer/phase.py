@@ -4,17 +4,16 @@ Conventions: directions are unit 3-vectors; cos_theta is the cosine between the 
 direction and the outgoing propagation direction, so g > 0 scatters forward. Pdfs are per steradian.
 
 The kernel-facing functions are plain arithmetic on NumPy ufuncs, without branches on values: the NumPy
-backend calls them on arrays of paths, and they compile unchanged with Numba (`*_jit`, or `numba.njit(fn)`
+backend calls them on arrays of paths, and they compile unchanged inside Numba kernels (`shared_math.shared`)
 in a kernel) for one path's scalars. A direction is anything indexable by component, `w[0], w[1], w[2]`:
 a (3,) array or a 3-tuple for one path, a (3, m) array for m paths; directions are returned as 3-tuples
 (of scalars, or of (m,) arrays). `validate_g` checks anisotropy values before they reach a kernel.
 """
 
-import numba
 import numpy as np
-from numba.extending import register_jitable
 
 from .errors import SpectralError
+from .shared_math import shared
 
 INV_FOUR_PI = 1.0 / (4.0 * np.pi)
 
@@ -28,14 +27,14 @@ def validate_g(values, name="Henyey–Greenstein anisotropy g"):
     return g
 
 
-@register_jitable
+@shared
 def hg_pdf(g, cos_theta):
     """Henyey–Greenstein phase function (1 − g²) / (4π (1 + g² − 2g cosθ)^{3/2}), per steradian."""
     denom = 1.0 + g * g - 2.0 * g * cos_theta
     return INV_FOUR_PI * (1.0 - g * g) / (denom * np.sqrt(denom))
 
 
-@register_jitable
+@shared
 def hg_sample_cos(g, u):
     """cosθ distributed as Henyey–Greenstein with anisotropy g, by exact inversion of its CDF (u in [0, 1)).
 
@@ -50,13 +49,13 @@ def hg_sample_cos(g, u):
     return np.minimum(np.maximum(cos_theta, -1.0), 1.0)
 
 
-@register_jitable
+@shared
 def rayleigh_pdf(cos_theta):
     """Rayleigh phase function 3 (1 + cos²θ) / (16π), per steradian."""
     return 3.0 / (16.0 * np.pi) * (1.0 + cos_theta * cos_theta)
 
 
-@register_jitable
+@shared
 def rayleigh_sample_cos(u):
     """cosθ distributed as Rayleigh scattering, by exact inversion of its CDF (u in [0, 1)).
 
@@ -68,13 +67,13 @@ def rayleigh_sample_cos(u):
     return np.minimum(np.copysign(a - 1.0 / a, xi), 1.0)
 
 
-@register_jitable
+@shared
 def isotropic_pdf(cos_theta):
     """Isotropic phase function 1 / (4π) per steradian (shaped like `cos_theta`)."""
     return cos_theta * 0.0 + INV_FOUR_PI
 
 
-@register_jitable
+@shared
 def isotropic_sample(u1, u2):
     """Uniform direction on the unit sphere (pdf 1/(4π)): z = 1 − 2u1, azimuth 2πu2; returns (x, y, z)."""
     z = 1.0 - 2.0 * u1
@@ -83,7 +82,7 @@ def isotropic_sample(u1, u2):
     return r * np.cos(phi), r * np.sin(phi), z
 
 
-@register_jitable
+@shared
 def orthonormal_basis(n):
     """Two unit vectors (t, b) with (t, b, n) a right-handed orthonormal frame, for unit `n`.
 
@@ -96,7 +95,7 @@ def orthonormal_basis(n):
     return (1.0 + sign * x * x * a, sign * b, -sign * x), (b, sign + y * y * a, -y)
 
 
-@register_jitable
+@shared
 def sample_direction(wi, cos_theta, u2):
     """The outgoing direction at angle cos_theta to `wi` (both propagation directions), azimuth 2πu2."""
     t, b = orthonormal_basis(wi)
@@ -110,11 +109,3 @@ def sample_direction(wi, cos_theta, u2):
     )
 
 
-hg_pdf_jit = numba.njit(hg_pdf, cache=True)
-hg_sample_cos_jit = numba.njit(hg_sample_cos, cache=True)
-rayleigh_pdf_jit = numba.njit(rayleigh_pdf, cache=True)
-rayleigh_sample_cos_jit = numba.njit(rayleigh_sample_cos, cache=True)
-isotropic_pdf_jit = numba.njit(isotropic_pdf, cache=True)
-isotropic_sample_jit = numba.njit(isotropic_sample, cache=True)
-orthonormal_basis_jit = numba.njit(orthonormal_basis, cache=True)
-sample_direction_jit = numba.njit(sample_direction, cache=True)

@@ -9,18 +9,17 @@ For the kernels every sampler is a `BinnedDistribution`: a density that is const
     stratified_binned(cdf, bin_pdf, u, n) -> (lams, pdfs)
 
 They are plain functions of arrays (the NumPy backend calls them on arrays of paths) and compile unchanged
-with Numba (`*_jit`, or `numba.njit(fn)` in a kernel; there they are called with one path's scalars).
+inside Numba kernels (`shared_math.shared`), where they are called with one path's scalars.
 
 The seminar report's samplers (§3.2) are here too: uniform over 380–700 nm, D65 by rejection sampling
 (`d65_rejection`, with its pdf) and the UV-extended range; plus the mixture of the lights' spectra, the
 visible-range importance density, and the split of a range into bands for per-wavelength passes.
 """
 
-import numba
 import numpy as np
-from numba.extending import register_jitable
 
 from .errors import SpectralError
+from .shared_math import shared
 from .spectra import Spectrum, illuminant
 from .wavelengths import (
     GRID,
@@ -42,7 +41,7 @@ _U_MAX = 1.0 - 2.0**-53
 _T_MAX = 1.0 - 2.0**-30
 
 
-@register_jitable
+@shared
 def sample_binned(cdf, u):
     """Wavelength (nm) with the piecewise-constant density of `cdf` (581 values on GRID), by inversion.
 
@@ -57,7 +56,7 @@ def sample_binned(cdf, u):
     return LAMBDA_MIN + i + np.minimum(np.maximum(t, 0.0), _T_MAX)
 
 
-@register_jitable
+@shared
 def pdf_binned(bin_pdf, lam):
     """Density per nm at wavelength(s) `lam` of the bins `bin_pdf` (580 values on GRID); 0 off the grid."""
     x = lam - LAMBDA_MIN
@@ -65,7 +64,7 @@ def pdf_binned(bin_pdf, lam):
     return bin_pdf[i] * ((x >= 0.0) & (x < bin_pdf.size))
 
 
-@register_jitable
+@shared
 def stratified_binned(cdf, bin_pdf, u, n):
     """Hero wavelength and n−1 rotated companions: u_i = (u + i/n) mod 1, λ_i = sample_binned(cdf, u_i).
 
@@ -82,9 +81,6 @@ def stratified_binned(cdf, bin_pdf, u, n):
     return lams, pdfs
 
 
-sample_binned_jit = numba.njit(sample_binned, cache=True)
-pdf_binned_jit = numba.njit(pdf_binned, cache=True)
-stratified_binned_jit = numba.njit(stratified_binned, cache=True)
 
 
 def _check_range(lo, hi):

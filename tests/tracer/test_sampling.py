@@ -6,6 +6,7 @@ Every chi-square test uses a fixed seed and passes when p > 1e-3: for a correct 
 
 import numpy as np
 import pytest
+from numba import njit as jit
 from scipy import integrate, stats
 
 from addon.tracer import sampling
@@ -173,12 +174,14 @@ def test_numba_and_numpy_forms_agree_exactly():
     dist = sampling.composite_light_distribution([(gaussian(420, 10), 1.0), (constant(1.0), 1.0)], 300, 800)
     u = np.concatenate((np.random.default_rng(7).random(500), [0.0, 1.0 - 2.0**-53, 1.0]))
     lam = np.concatenate((sampling.sample_binned(dist.cdf, u), [250.0, 299.999, 800.0, 829.9999, 830.0, 100.0]))
-    assert np.array_equal(sampling.sample_binned(dist.cdf, u), [sampling.sample_binned_jit(dist.cdf, x) for x in u])
-    pdfs = [sampling.pdf_binned_jit(dist.bin_pdf, x) for x in lam]
+    sample_jit, pdf_jit, stratified_jit = (jit(f) for f in (sampling.sample_binned, sampling.pdf_binned,
+                                                             sampling.stratified_binned))
+    assert np.array_equal(sampling.sample_binned(dist.cdf, u), [sample_jit(dist.cdf, x) for x in u])
+    pdfs = [pdf_jit(dist.bin_pdf, x) for x in lam]
     assert np.array_equal(sampling.pdf_binned(dist.bin_pdf, lam), pdfs)
     lams, pdfs = sampling.stratified_binned(dist.cdf, dist.bin_pdf, u, 4)
     for k, x in enumerate(u):
-        jit_lams, jit_pdfs = sampling.stratified_binned_jit(dist.cdf, dist.bin_pdf, x, 4)
+        jit_lams, jit_pdfs = stratified_jit(dist.cdf, dist.bin_pdf, x, 4)
         assert np.array_equal(jit_lams, lams[:, k]) and np.array_equal(jit_pdfs, pdfs[:, k])
 
 
