@@ -46,13 +46,16 @@ def affine_matrix(value, what: str) -> np.ndarray:
         raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got shape {matrix.shape}")
     if not np.all(np.isfinite(matrix)):
         raise SpectralError(f"{what}: the matrix contains NaN or infinite numbers")
-    if not np.array_equal(matrix[3], [0.0, 0.0, 0.0, 1.0]):
+    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-9):
         raise SpectralError(
             f"{what}: the bottom row must be [0, 0, 0, 1], found {matrix[3].tolist()} "
             "(matrices are row-major and act on column vectors: is it transposed?)"
         )
-    if abs(np.linalg.det(matrix[:3, :3])) < 1e-12 * max(1.0, np.abs(matrix[:3, :3]).max() ** 3):
-        raise SpectralError(f"{what}: the matrix is singular (a zero scale?)")
+    matrix[3] = [0.0, 0.0, 0.0, 1.0]
+    # Scale-free test: |det| against the product of the column lengths (1 for a rotation of any scale).
+    linear = matrix[:3, :3]
+    if abs(np.linalg.det(linear)) <= 1e-9 * np.prod(np.linalg.norm(linear, axis=0)):
+        raise SpectralError(f"{what}: the matrix is singular (a zero scale, or two axes in one direction?)")
     return matrix
 
 
@@ -183,7 +186,7 @@ def _read_vdb(path: Path, grid_name: str | None, index_to_world):
 def _vdb_transform(transform, where: str) -> np.ndarray:
     """The 4×4 index-to-world matrix (column-vector convention) of a linear OpenVDB transform."""
     if not transform.isLinear:
-        raise SpectralError(f"{where} has a non-linear ({transform.typeName}) transform; only linear ones are supported")
+        raise SpectralError(f"{where} has a non-linear ({transform.typeName}) transform; only linear ones work")
     origin = np.array(transform.indexToWorld((0.0, 0.0, 0.0)))
     matrix = np.eye(4)
     for axis in range(3):
@@ -207,7 +210,7 @@ def _dense_buffer(shape, where: str) -> np.ndarray:
 
 def _check_values(values: np.ndarray, where: str, nonnegative: bool) -> None:
     if values.ndim != 3:
-        raise SpectralError(f"{where} must be a 3-D array indexed [x, y, z], found {values.ndim}-D shape {values.shape}")
+        raise SpectralError(f"{where} must be a 3-D array indexed [x, y, z], found shape {values.shape}")
     if values.size == 0:
         raise SpectralError(f"{where} is empty (shape {values.shape})")
     bad = ~np.isfinite(values)
@@ -216,7 +219,8 @@ def _check_values(values: np.ndarray, where: str, nonnegative: bool) -> None:
     negative = values < 0
     if nonnegative and negative.any():
         raise SpectralError(
-            f"{where} has {int(negative.sum())} negative values (min {values.min():g}), first at index {_first(negative)}"
+            f"{where} has {int(negative.sum())} negative values (min {values.min():g}), "
+            f"first at index {_first(negative)}"
         )
 
 

@@ -84,6 +84,12 @@ def test_bad_npy_arrays_are_named(tmp_path, array, words):
         assert word in message
 
 
+def test_microscopic_voxels_are_not_singular(tmp_path):
+    path = save_grid_npy(tmp_path / "scan.npy", Grid(pattern(), np.eye(4)))
+    tiny = np.diag([1e-7, 2e-7, 1e-7, 1.0])
+    np.testing.assert_array_equal(load_grid(path, index_to_world=tiny).index_to_world, tiny)
+
+
 def test_negative_values_allowed_when_asked(tmp_path):
     path = write_npy(tmp_path, np.array([[[1.0, -0.5]]], np.float32))
     assert load_grid(path, index_to_world=np.eye(4), nonnegative=False).values.min() == -0.5
@@ -115,6 +121,7 @@ def test_missing_corrupt_and_misnamed_files(tmp_path):
         (np.eye(3), ["4 lists of 4", "(3, 3)"]),
         (ROTATE_SCALE.T, ["bottom row", "transposed"]),
         (np.diag([1.0, 0.0, 1.0, 1.0]), ["singular"]),
+        ([[1, 1, 0, 0], [1, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], ["singular"]),
         ([[1, 0, 0, 0]] * 3 + [[0, 0, 0, "x"]], ["4 lists of 4"]),
         (np.where(np.eye(4) > 0, np.nan, 0.0), ["NaN"]),
     ],
@@ -151,9 +158,10 @@ def test_vdb_orientation_and_transform(openvdb, tmp_path):
     accessor = vdb_grid.getConstAccessor()
     for ijk in np.ndindex(values.shape):
         world = loaded.index_to_world @ [*ijk, 1.0]
-        np.testing.assert_allclose(vdb_grid.transform.indexToWorld(tuple(float(c) + o for c, o in zip(ijk, offset))), world[:3])
+        vdb_ijk = tuple(c + o for c, o in zip(ijk, offset))
+        np.testing.assert_allclose(vdb_grid.transform.indexToWorld(tuple(map(float, vdb_ijk))), world[:3])
         voxel = vdb_grid.transform.worldToIndexCellCentered(tuple(world[:3]))
-        assert voxel == tuple(c + o for c, o in zip(ijk, offset))
+        assert voxel == vdb_ijk
         assert accessor.getValue(voxel) == loaded.values[ijk]
 
 
@@ -198,7 +206,8 @@ def test_vdb_transform_override_replaces_the_files(openvdb, tmp_path):
 
 
 def test_vdb_grid_choice(openvdb, tmp_path):
-    path = save_grid_vdb(tmp_path / "two.vdb", Grid(pattern(), np.eye(4), "density"), Grid(pattern(), np.eye(4), "flame"))
+    density, flame = Grid(pattern(), np.eye(4), "density"), Grid(pattern(), np.eye(4), "flame")
+    path = save_grid_vdb(tmp_path / "two.vdb", density, flame)
     with pytest.raises(SpectralError) as error:
         load_grid(path, "temperature")
     assert all(word in str(error.value) for word in ["two.vdb", "'temperature'", "'density'", "'flame'"])
