@@ -1,0 +1,234 @@
+"""Voxel grids on disk: reading and writing dense `.npy` arrays and OpenVDB `.vdb` files as `scene.Grid`.
+
+Index convention (ours and OpenVDB's alike): the voxel with index (i, j, k) is centred at index-space
+point (i, j, k), and `index_to_world` maps index space to world space. A `.vdb` grid becomes a dense
+copy of its active voxel bounding box: our array index (0, 0, 0) is the VDB voxel at the box's minimum
+corner, and `index_to_world` is the VDB's transform with that offset folded in. Values outside the
+box (the VDB background) are dropped.
+
+Also the one place that asks `bpy` for Blender's bundled `openvdb` module when no other is importable.
+"""
+
+import functools
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SpectralError
+from .scene import Grid
+
+_FLOAT_GRID_TYPES = ("FloatGrid", "DoubleGrid")
+# What openvdb raises for unreadable files: OSError (missing, not a VDB), LookupError (truncated or
+# unknown grid type), RuntimeError and ValueError (other corruption).
+_VDB_READ_ERRORS = (OSError, LookupError, RuntimeError, ValueError)
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation now, or None when the platform cannot tell."""
+    try:
+        import psutil
+    except ImportError:
+        try:
+            return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (AttributeError, ValueError, OSError):
+            return None
+    return int(psutil.virtual_memory().available)
+
+
+def affine_matrix(value, what: str) -> np.ndarray:
+    """`value` as a 4×4 float64 affine matrix (row-major, acting on column vectors), or a SpectralError."""
+    try:
+        matrix = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got {value!r}") from None
+    if matrix.shape != (4, 4):
+        raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got shape {matrix.shape}")
+    if not np.all(np.isfinite(matrix)):
+        raise SpectralError(f"{what}: the matrix contains NaN or infinite numbers")
+    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-9):
+        raise SpectralError(
+            f"{what}: the bottom row must be [0, 0, 0, 1], found {matrix[3].tolist()} "
+            "(matrices are row-major and act on column vectors: is it transposed?)"
+        )
+    matrix[3] = [0.0, 0.0, 0.0, 1.0]
+    # Scale-free test: |det| against the product of the column lengths (1 for a rotation of any scale).
+    linear = matrix[:3, :3]
+    if abs(np.linalg.det(linear)) <= 1e-9 * np.prod(np.linalg.norm(linear, axis=0)):
+        raise SpectralError(f"{what}: the matrix is singular (a zero scale, or two axes in one direction?)")
+    return matrix
+
+
+def load_grid(path, grid_name: str | None = None, index_to_world=None, *, nonnegative: bool = True) -> Grid:
+    """Read a grid from `.npy` or `.vdb`, checked: 3-D, not empty, finite and (unless `nonnegative` is
+    False, as for temperatures that an offset makes positive) without negative values.
+
+    `.npy`: a 3-D array indexed [x, y, z]; `index_to_world` is required and `grid_name` only names it
+    (default: the file's stem). `.vdb`: `grid_name` selects the grid (default: the file's only grid);
+    `index_to_world`, when given, replaces the VDB's own transform (it maps VDB index space to world).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SpectralError(f"grid file {path} does not exist")
+    suffix = path.suffix.lower()
+    if suffix == ".npy":
+        if index_to_world is None:
+            raise SpectralError(f"grid file {path}: a .npy grid needs an index_to_world matrix")
+        name = grid_name or path.stem
+        values = _read_npy(path, name)
+        matrix = affine_matrix(index_to_world, f"grid {name!r} in {path}: index_to_world")
+    elif suffix == ".vdb":
+        values, matrix, name = _read_vdb(path, grid_name, index_to_world)
+    else:
+        raise SpectralError(f"grid file {path}: unknown grid format {path.suffix!r} (use .npy or .vdb)")
+    _check_values(values, f"grid {name!r} in {path}", nonnegative)
+    return Grid(values=values, index_to_world=matrix, name=name)
+
+
+def save_grid_npy(path, grid: Grid) -> Path:
+    """Write `grid.values` as a float32 `.npy` array (its transform belongs in scene.json)."""
+    path = Path(path)
+    np.save(path, np.ascontiguousarray(grid.values, dtype=np.float32), allow_pickle=False)
+    return path
+
+
+def save_grid_vdb(path, *grids: Grid) -> Path:
+    """Write grids into one `.vdb` file: FloatGrid fog volumes named `grid.name`, array index (i, j, k)
+    at VDB voxel (i, j, k), with a linear transform equal to `grid.index_to_world`. Zero voxels are
+    inactive."""
+    vdb = openvdb_module()
+    out = []
+    for grid in grids:
+        vdb_grid = vdb.FloatGrid()
+        vdb_grid.name = grid.name
+        vdb_grid.gridClass = vdb.GridClass.FOG_VOLUME
+        vdb_grid.copyFromArray(np.ascontiguousarray(grid.values, dtype=np.float32))
+        # OpenVDB's matrices act on row vectors (translation in the bottom row): ours, transposed.
+        vdb_grid.transform = vdb.createLinearTransform(np.asarray(grid.index_to_world, dtype=np.float64).T.tolist())
+        out.append(vdb_grid)
+    path = Path(path)
+    vdb.write(str(path), out)
+    return path
+
+
+@functools.cache
+def openvdb_module():
+    """The `openvdb` Python module: a standalone install, else the one bundled with Blender (via bpy)."""
+    try:
+        import openvdb
+    except ImportError:
+        pass
+    else:
+        return openvdb
+    try:
+        import bpy
+
+        bpy.utils.expose_bundled_modules()
+        import openvdb
+    except (ImportError, AttributeError):
+        raise SpectralError(
+            "reading or writing .vdb files needs the openvdb Python module, and neither a standalone "
+            "openvdb nor Blender's bundled one (through the bpy module) is available here: install the "
+            "bpy module, run inside Blender, or use .npy grids"
+        ) from None
+    return openvdb
+
+
+def _read_npy(path: Path, name: str) -> np.ndarray:
+    try:
+        array = np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError) as problem:
+        raise SpectralError(f"grid {name!r} in {path} cannot be read as a NumPy array: {problem}") from None
+    if not isinstance(array, np.ndarray):
+        raise SpectralError(f"grid {name!r} in {path} is not a single .npy array (an .npz archive?)")
+    if not (np.issubdtype(array.dtype, np.floating) or np.issubdtype(array.dtype, np.integer)):
+        raise SpectralError(f"grid {name!r} in {path} holds {array.dtype} values, not real numbers")
+    with np.errstate(over="ignore"):  # float64 beyond float32's range becomes inf, reported as such
+        return np.ascontiguousarray(array, dtype=np.float32)
+
+
+def _read_vdb(path: Path, grid_name: str | None, index_to_world):
+    vdb = openvdb_module()
+    try:
+        headers = {grid.name: grid for grid in vdb.readAllGridMetadata(str(path))}
+    except _VDB_READ_ERRORS as problem:
+        raise SpectralError(f"grid file {path} cannot be read as OpenVDB: {problem}") from None
+    if grid_name is None:
+        if len(headers) != 1:
+            raise SpectralError(f"grid file {path} holds {_listing(headers)}: name the grid to use")
+        grid_name = next(iter(headers))
+    if grid_name not in headers:
+        raise SpectralError(f"grid file {path} has no grid {grid_name!r}; it holds {_listing(headers)}")
+    where = f"grid {grid_name!r} in {path}"
+    header = headers[grid_name]
+    if type(header).__name__ not in _FLOAT_GRID_TYPES:
+        raise SpectralError(f"{where} is a {type(header).__name__}, not a grid of floats")
+    if header.gridClass == vdb.GridClass.LEVEL_SET:
+        raise SpectralError(f"{where} is a level set (signed distances), not a density")
+    if index_to_world is None:
+        vdb_to_world = _vdb_transform(header.transform, where)
+    else:
+        vdb_to_world = affine_matrix(index_to_world, f"{where}: index_to_world")
+    try:
+        vdb_grid = vdb.read(str(path), grid_name)
+    except _VDB_READ_ERRORS as problem:
+        raise SpectralError(f"{where} cannot be read: {problem}") from None
+    lo, hi = (np.array(corner, dtype=np.int64) for corner in vdb_grid.evalActiveVoxelBoundingBox())
+    if vdb_grid.activeVoxelCount() == 0:
+        raise SpectralError(f"{where} is empty (no active voxels)")
+    values = _dense_buffer(hi - lo + 1, where)
+    vdb_grid.copyToArray(values, tuple(int(c) for c in lo))  # needs a C-contiguous array
+    shift = np.eye(4)
+    shift[:3, 3] = lo
+    return values, vdb_to_world @ shift, grid_name
+
+
+def _vdb_transform(transform, where: str) -> np.ndarray:
+    """The 4×4 index-to-world matrix (column-vector convention) of a linear OpenVDB transform."""
+    if not transform.isLinear:
+        raise SpectralError(f"{where} has a non-linear ({transform.typeName}) transform; only linear ones work")
+    origin = np.array(transform.indexToWorld((0.0, 0.0, 0.0)))
+    matrix = np.eye(4)
+    for axis in range(3):
+        unit = [0.0, 0.0, 0.0]
+        unit[axis] = 1.0
+        matrix[:3, axis] = np.array(transform.indexToWorld(tuple(unit))) - origin
+    matrix[:3, 3] = origin
+    return affine_matrix(matrix, f"{where}: transform")
+
+
+def _dense_buffer(shape, where: str) -> np.ndarray:
+    needed = int(np.prod(shape)) * 4
+    available = available_memory()
+    if available is not None and needed > available:
+        raise SpectralError(
+            f"{where}: a dense copy of its {'×'.join(map(str, shape))} active voxel box needs "
+            f"{needed / 2**30:.1f} GiB, more than the {available / 2**30:.1f} GiB of memory available"
+        )
+    return np.zeros(tuple(int(n) for n in shape), dtype=np.float32)
+
+
+def _check_values(values: np.ndarray, where: str, nonnegative: bool) -> None:
+    if values.ndim != 3:
+        raise SpectralError(f"{where} must be a 3-D array indexed [x, y, z], found shape {values.shape}")
+    if values.size == 0:
+        raise SpectralError(f"{where} is empty (shape {values.shape})")
+    bad = ~np.isfinite(values)
+    if bad.any():
+        raise SpectralError(f"{where} has {int(bad.sum())} NaN or infinite values, first at index {_first(bad)}")
+    negative = values < 0
+    if nonnegative and negative.any():
+        raise SpectralError(
+            f"{where} has {int(negative.sum())} negative values (min {values.min():g}), "
+            f"first at index {_first(negative)}"
+        )
+
+
+def _first(mask: np.ndarray) -> tuple:
+    return tuple(int(i) for i in np.argwhere(mask)[0])
+
+
+def _listing(headers: dict) -> str:
+    if not headers:
+        return "no grids"
+    return "grids " + ", ".join(f"{name!r} ({type(grid).__name__})" for name, grid in headers.items())
