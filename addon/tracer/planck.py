@@ -7,11 +7,14 @@ validated temperatures) and the kernels (per-voxel temperatures, compiled by Num
 import numpy as np
 import scipy.constants
 
+from .shared_math import shared
+
 NANOMETRE = 1e-9  # metres
 FIRST_RADIATION_CONSTANT = 2 * scipy.constants.h * scipy.constants.c**2  # 2hc², W·m²·sr⁻¹
 SECOND_RADIATION_CONSTANT = scipy.constants.h * scipy.constants.c / scipy.constants.k  # hc/k, m·K
 
 
+@shared
 def planck_radiance(wavelength_nm, temperature):
     """Black-body spectral radiance per nanometre for T > 0 (0 for T ≤ 0); underflows to 0, never
     overflows (evaluated in log space: log(eˣ − 1) = x + log(1 − e⁻ˣ))."""

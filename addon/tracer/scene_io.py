@@ -72,8 +72,8 @@ def load_scene(path) -> Scene:
     folder = path.parent
     camera = _camera(data["camera"], "camera")
     media = tuple(_medium(spec, f"media[{i}]", folder) for i, spec in enumerate(_list(data.get("media", []), "media")))
-    lights = tuple(_light(spec, f"lights[{i}]") for i, spec in enumerate(_list(data.get("lights", []), "lights")))
-    if not lights:
+    lights = tuple(_light(spec, f"lights[{i}]", folder) for i, spec in enumerate(_list(data.get("lights", []), "lights")))
+    if not lights and not any(medium.emission is not None for medium in media):
         raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point or spot light")
     return Scene(camera=camera, media=media, lights=lights, settings=_render(data.get("render", {}), "render"))
 
@@ -147,10 +147,10 @@ def _medium(value, where: str, folder: Path) -> Medium:
     name = data.get("name", where)
     if not isinstance(name, str):
         raise SpectralError(f"{where}.name: expected a string, found {name!r}")
-    extinction = _spectrum(data["extinction"], f"{where}.extinction")
+    extinction = _spectrum(data["extinction"], f"{where}.extinction", folder)
     _check_range(extinction, f"{where}.extinction", "extinction must not be negative", 0.0, np.inf)
-    densities, table = _albedo(data["albedo"], f"{where}.albedo")
-    anisotropy = _spectrum(data.get("anisotropy", 0.0), f"{where}.anisotropy")
+    densities, table = _albedo(data["albedo"], f"{where}.albedo", folder)
+    anisotropy = _spectrum(data.get("anisotropy", 0.0), f"{where}.anisotropy", folder)
     _check_range(anisotropy, f"{where}.anisotropy", "|g| must be below 1", -1.0, 1.0, closed=False)
     fluorescence = data.get("fluorescence")
     emission = data.get("emission")
@@ -163,7 +163,7 @@ def _medium(value, where: str, folder: Path) -> Medium:
         albedo_table=table,
         anisotropy=anisotropy,
         phase=_choice(data.get("phase", "hg"), f"{where}.phase", PHASES),
-        fluorescence=None if fluorescence is None else _fluorescence(fluorescence, f"{where}.fluorescence"),
+        fluorescence=None if fluorescence is None else _fluorescence(fluorescence, f"{where}.fluorescence", folder),
         emission=None if emission is None else _emission(emission, f"{where}.emission", folder),
     )
 
@@ -185,7 +185,7 @@ def _grid(value, where: str, folder: Path, nonnegative: bool = True) -> Grid:
         raise SpectralError(f"{where}: {problem}") from None
 
 
-def _albedo(value, where: str) -> tuple[np.ndarray, np.ndarray]:
+def _albedo(value, where: str, folder: Path) -> tuple[np.ndarray, np.ndarray]:
     """(densities, table): one spectrum is a single level at density 0 (the same at every density)."""
     if isinstance(value, dict) and "type" not in value:
         data = _fields(value, where, _ALBEDO_TABLE)
@@ -199,22 +199,22 @@ def _albedo(value, where: str) -> tuple[np.ndarray, np.ndarray]:
         densities = np.array([_float(d, f"{where}.densities[{i}]", 0.0) for i, d in enumerate(levels)])
         if np.any(np.diff(densities) <= 0):
             raise SpectralError(f"{where}.densities: density levels must increase strictly, found {levels}")
-        rows = [_albedo_spectrum(s, f"{where}.spectra[{i}]") for i, s in enumerate(spectra_)]
+        rows = [_albedo_spectrum(s, f"{where}.spectra[{i}]", folder) for i, s in enumerate(spectra_)]
         return densities, np.stack([row.values for row in rows])
-    return np.zeros(1), _albedo_spectrum(value, where).values[np.newaxis, :].copy()
+    return np.zeros(1), _albedo_spectrum(value, where, folder).values[np.newaxis, :].copy()
 
 
-def _albedo_spectrum(value, where: str) -> Spectrum:
-    albedo = _spectrum(value, where)
+def _albedo_spectrum(value, where: str, folder: Path) -> Spectrum:
+    albedo = _spectrum(value, where, folder)
     _check_range(albedo, where, "albedo must be within [0, 1]", 0.0, 1.0)
     return albedo
 
 
-def _fluorescence(value, where: str) -> Fluorescence:
+def _fluorescence(value, where: str, folder: Path) -> Fluorescence:
     data = _fields(value, where, _FLUORESCENCE)
-    excitation = _spectrum(data["excitation"], f"{where}.excitation")
+    excitation = _spectrum(data["excitation"], f"{where}.excitation", folder)
     _check_range(excitation, f"{where}.excitation", "excitation must not be negative", 0.0, np.inf)
-    emission = _spectrum(data["emission"], f"{where}.emission")
+    emission = _spectrum(data["emission"], f"{where}.emission", folder)
     _check_range(emission, f"{where}.emission", "emission must not be negative", 0.0, np.inf)
     if emission.integral() <= 0:
         raise SpectralError(f"{where}.emission: the emission spectrum is zero everywhere, so it cannot be a pdf")
@@ -244,7 +244,7 @@ def _emission(value, where: str, folder: Path) -> BlackbodyEmission:
     )
 
 
-def _light(value, where: str) -> Light:
+def _light(value, where: str, folder: Path) -> Light:
     if not isinstance(value, dict) or "kind" not in value:
         kinds = ", ".join(LIGHT_KINDS)
         raise SpectralError(f"{where}: a light is an object with a \"kind\" ({kinds}), found {value!r}")
@@ -252,13 +252,14 @@ def _light(value, where: str) -> Light:
     extra = _LIGHT_FIELDS[kind]
     schema = {"required": _LIGHT_COMMON + extra["required"], "optional": _LIGHT_OPTIONAL + extra["optional"]}
     data = _fields(value, where, schema, what=f" for {kind} lights")
-    spectrum = _light_spectrum(data["spectrum"], f"{where}.spectrum")
+    spectrum = _light_spectrum(data["spectrum"], f"{where}.spectrum", folder)
     fields = {}
     if kind == "sun":
         fields["direction"] = _direction(data["direction"], f"{where}.direction")
         fields["angle"] = float(np.radians(_float(data.get("angle", 0.0), f"{where}.angle", 0.0, 180.0)))
     if kind == "sky" and "horizon_spectrum" in data:
-        fields["horizon_spectrum"] = _light_spectrum(data["horizon_spectrum"], f"{where}.horizon_spectrum")
+        fields["horizon_spectrum"] = _light_spectrum(
+            data["horizon_spectrum"], f"{where}.horizon_spectrum", folder)
     if kind in ("point", "spot"):
         fields["position"] = _vector(data["position"], f"{where}.position")
     if kind == "spot":
@@ -273,8 +274,8 @@ def _light(value, where: str) -> Light:
     return Light(kind=kind, spectrum=spectrum, strength=strength, name=name, **fields)
 
 
-def _light_spectrum(value, where: str) -> Spectrum:
-    spectrum = _spectrum(value, where)
+def _light_spectrum(value, where: str, folder: Path) -> Spectrum:
+    spectrum = _spectrum(value, where, folder)
     _check_range(spectrum, where, "a light spectrum must not be negative", 0.0, np.inf)
     return spectrum
 
@@ -384,11 +385,11 @@ def _direction(value, where: str) -> np.ndarray:
     return vector / length
 
 
-def _spectrum(value, where: str) -> Spectrum:
+def _spectrum(value, where: str, folder: Path) -> Spectrum:
     """`spectra.from_spec` with the JSON path in every error, and NumPy's complaints about wrongly typed
     fields turned into a SpectralError that shows the description."""
     try:
-        return spectra.from_spec(value, name=where)
+        return spectra.from_spec(value, name=where, base_dir=folder)
     except SpectralError as problem:
         message = str(problem)
         raise SpectralError(message if where in message else f"{where}: {message}") from None

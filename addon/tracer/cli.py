@@ -1,0 +1,94 @@
+"""Command line of the tracer: `python -m addon.tracer render|validate SCENE.json ...`.
+
+Exit codes: 0 success, 1 bad input (a SpectralError, message on stderr), 2 usage error,
+130 interrupted (Ctrl-C; nothing is written).
+"""
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from .errors import SpectralError
+
+EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+class ProgressBar:
+    """A one-line text progress bar on a stream (rewritten in place)."""
+
+    def __init__(self, stream=sys.stderr, width: int = 30):
+        self.stream, self.width, self.start = stream, width, time.perf_counter()
+
+    def __call__(self, _film, fraction: float) -> None:
+        filled = int(round(fraction * self.width))
+        elapsed = time.perf_counter() - self.start
+        remaining = elapsed * (1 - fraction) / fraction if fraction > 0 else 0.0
+        self.stream.write(f"\r[{'#' * filled}{'.' * (self.width - filled)}] {fraction:6.1%} "
+                          f"{elapsed:6.1f}s elapsed, ~{remaining:5.1f}s left")
+        if fraction >= 1:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m addon.tracer", description="Spectral volume path tracer")
+    commands = parser.add_subparsers(dest="command", required=True)
+    render = commands.add_parser("render", help="render a scene file to images")
+    render.add_argument("scene", type=Path, help="scene.json (see docs/scene-format.md)")
+    render.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (XYZ, RGB, variance)")
+    render.add_argument("--png", type=Path, help="also write a PNG preview (Standard view)")
+    render.add_argument("--npy", type=Path, help="also write XYZ as a float32 .npy array (height, width, 3)")
+    render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
+    render.add_argument("--seed", type=int, help="random seed (default: the scene's)")
+    render.add_argument("--backend", choices=("numba", "numpy"), help="kernel backend (default: the scene's)")
+    render.add_argument("--threads", type=int, help="worker threads for the numba backend")
+    render.add_argument("--stats", type=Path, help="write timing, samples per second and mean XYZ as JSON")
+    render.add_argument("--quiet", action="store_true", help="no progress bar")
+    validate = commands.add_parser("validate", help="check a scene file and summarise it")
+    validate.add_argument("scene", type=Path)
+    return parser
+
+
+def _render(args) -> int:
+    from . import image_io
+    from .render import render
+    from .scene_io import load_scene
+
+    scene = load_scene(args.scene)
+    progress = None if args.quiet else ProgressBar()
+    result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend, threads=args.threads,
+                    progress=progress)
+    film = result.film
+    image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
+    if args.png:
+        image_io.write_png(args.png, film.rgb())
+    if args.npy:
+        image_io.write_npy(args.npy, film.xyz)
+    if args.stats:
+        args.stats.parent.mkdir(parents=True, exist_ok=True)
+        args.stats.write_text(json.dumps(result.stats, indent=2))
+    print(f"wrote {args.out} ({film.width}×{film.height}, {result.stats['samples_per_pixel']} spp, "
+          f"{result.seconds:.1f} s, {result.stats['pixel_samples_per_second']:.0f} pixel-samples/s)")
+    return EXIT_OK
+
+
+def _validate(args) -> int:
+    from .scene_io import validate_scene
+
+    for line in validate_scene(args.scene):
+        print(line)
+    return EXIT_OK
+
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return _render(args) if args.command == "render" else _validate(args)
+    except SpectralError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("\ninterrupted: nothing written", file=sys.stderr)
+        return EXIT_INTERRUPTED

@@ -1,0 +1,298 @@
+"""Lowers a `Scene` to the flat arrays the kernels consume (`KernelScene`), for one wavelength band.
+
+Everything the integrator needs is precomputed here once per band: spectra tabulated on the grid,
+light spectra scaled to their luminance, majorant grids, the hero-wavelength distribution and the
+XYZ weights. Both backends read the same `KernelScene`, so they cannot disagree about the scene.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+
+from . import colorimetry, sampling
+from .errors import SpectralError
+from .majorant import block_size_for, majorant_grid
+from .scene import Grid, Light, Medium, Scene
+from .spectra import Spectrum
+from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
+
+LIGHT_KINDS = {"sun": 0, "environment": 1, "sky": 2, "point": 3, "spot": 4}
+PHASE_KINDS = {"hg": 0, "rayleigh": 1}
+CAMERA_KINDS = {"perspective": 0, "orthographic": 1}
+
+
+class KernelScene(NamedTuple):
+    # camera
+    cam_to_world: np.ndarray  # (4, 4)
+    cam_kind: int
+    width: int
+    height: int
+    cam_extent: np.ndarray  # (4,): film extent x, y and shift x, y (camera-space units at z = -1 or ortho)
+    # media (M); grids flattened into one array each with offsets and shapes
+    density_data: np.ndarray
+    density_offset: np.ndarray
+    density_shape: np.ndarray  # (M, 3)
+    world_to_padded: np.ndarray  # (M, 4, 4): world → padded index space of the density grid
+    majorant_data: np.ndarray
+    majorant_offset: np.ndarray
+    majorant_shape: np.ndarray  # (M, 3)
+    majorant_block: np.ndarray  # (M,) cells per block
+    majorant_coeff: np.ndarray  # (M,) density_scale · max over λ of (extinction + excitation)
+    density_scale: np.ndarray  # (M,)
+    extinction: np.ndarray  # (M, GRID)
+    excitation: np.ndarray  # (M, GRID) fluorophore absorption per unit density
+    anisotropy: np.ndarray  # (M, GRID)
+    phase_kind: np.ndarray  # (M,)
+    albedo_densities: np.ndarray  # (M, Lmax)
+    albedo_count: np.ndarray  # (M,)
+    albedo_table: np.ndarray  # (M, Lmax, GRID)
+    fluor_strength: np.ndarray  # (M,) quantum_yield · ∫excitation dλ
+    emission_pdf: np.ndarray  # (M, GRID) fluorescence emission pdf per nm
+    excitation_cdf: np.ndarray  # (M, GRID) binned cdf for sampling λ_in ∝ excitation
+    excitation_pdf: np.ndarray  # (M, GRID - 1)
+    temperature_data: np.ndarray
+    temperature_offset: np.ndarray  # (M,) -1 when the medium has no emission
+    temperature_shape: np.ndarray  # (M, 3)
+    temperature_world_to_padded: np.ndarray  # (M, 4, 4)
+    temperature_map: np.ndarray  # (M, 3): scale, offset, intensity
+    # lights (NL)
+    light_kind: np.ndarray
+    light_spd: np.ndarray  # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky), intensity (point/spot)
+    light_spd_horizon: np.ndarray  # (NL, GRID) sky only
+    light_dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots
+    light_pos: np.ndarray  # (NL, 3)
+    light_cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
+    light_smooth: np.ndarray  # (NL,) spot edge width in cosine
+    light_pmf: np.ndarray  # (NL,) selection probability for next-event estimation
+    light_power: np.ndarray  # (NL,) power proxy (luminance × geometry) used for pmf and λ sampling
+    # wavelengths and colour
+    lambda_cdf: np.ndarray  # (GRID,) binned cdf of the hero wavelength in this band
+    lambda_pdf: np.ndarray  # (GRID - 1,)
+    wavelengths_per_path: int
+    xyz_weights: np.ndarray  # (3, GRID)
+    # path settings
+    max_depth: int
+    rr_depth: int
+
+
+def _world_to_padded(grid: Grid) -> np.ndarray:
+    try:
+        inverse = np.linalg.inv(np.asarray(grid.index_to_world, dtype=np.float64))
+    except np.linalg.LinAlgError:
+        raise SpectralError(f"grid {grid.name!r}: its index-to-world transform is singular") from None
+    shift = np.eye(4)
+    shift[:3, 3] = 1.0
+    return shift @ inverse
+
+
+def _flatten(arrays):
+    offsets = np.cumsum([0] + [a.size for a in arrays[:-1]]).astype(np.int64) if arrays else np.zeros(0, np.int64)
+    data = np.concatenate([a.ravel() for a in arrays]).astype(np.float32) if arrays else np.zeros(1, np.float32)
+    shapes = np.array([a.shape for a in arrays], dtype=np.int64).reshape(-1, 3)
+    return data, offsets, shapes
+
+
+def _media_arrays(media: tuple[Medium, ...]) -> dict:
+    count = len(media)
+    levels = max([m.albedo_densities.size for m in media], default=1)
+    out = {
+        "density_scale": np.array([m.density_scale for m in media], dtype=np.float64),
+        "extinction": np.array([m.extinction.values for m in media]).reshape(count, GRID.size),
+        "excitation": np.zeros((count, GRID.size)),
+        "anisotropy": np.array([m.anisotropy.values for m in media]).reshape(count, GRID.size),
+        "phase_kind": np.array([PHASE_KINDS[m.phase] for m in media], dtype=np.int64),
+        "albedo_densities": np.zeros((count, levels)),
+        "albedo_count": np.array([m.albedo_densities.size for m in media], dtype=np.int64),
+        "albedo_table": np.zeros((count, levels, GRID.size)),
+        "fluor_strength": np.zeros(count),
+        "emission_pdf": np.zeros((count, GRID.size)),
+        "excitation_cdf": np.zeros((count, GRID.size)),
+        "excitation_pdf": np.zeros((count, GRID.size - 1)),
+        "temperature_offset": np.full(count, -1, dtype=np.int64),
+        "temperature_world_to_padded": np.tile(np.eye(4), (count, 1, 1)),
+        "temperature_map": np.zeros((count, 3)),
+    }
+    for index, medium in enumerate(media):
+        n = medium.albedo_densities.size
+        out["albedo_densities"][index, :n] = medium.albedo_densities
+        out["albedo_table"][index, :n] = medium.albedo_table
+        if medium.fluorescence is not None:
+            fluorescence = medium.fluorescence
+            out["excitation"][index] = fluorescence.excitation.values
+            total = fluorescence.excitation.integral()
+            emission_total = fluorescence.emission.integral()
+            if total <= 0 or emission_total <= 0:
+                raise SpectralError(f"medium {medium.name!r}: fluorescence excitation and emission spectra must be non-zero")
+            out["fluor_strength"][index] = fluorescence.quantum_yield * total
+            out["emission_pdf"][index] = fluorescence.emission.values / emission_total
+            excitation = sampling.from_spectrum(fluorescence.excitation, LAMBDA_MIN, LAMBDA_MAX)
+            out["excitation_cdf"][index] = excitation.cdf
+            out["excitation_pdf"][index] = excitation.bin_pdf
+    peak = out["extinction"] + out["excitation"]
+    out["majorant_coeff"] = out["density_scale"] * (peak.max(axis=1) if count else np.zeros(0))
+
+    densities = [np.asarray(m.density.values, dtype=np.float32) for m in media]
+    out["density_data"], out["density_offset"], out["density_shape"] = _flatten(densities)
+    out["world_to_padded"] = np.array([_world_to_padded(m.density) for m in media]).reshape(count, 4, 4)
+    blocks = [block_size_for(d.shape) for d in densities]
+    majorants = [majorant_grid(d, b) for d, b in zip(densities, blocks)]
+    out["majorant_data"], out["majorant_offset"], out["majorant_shape"] = _flatten(majorants)
+    out["majorant_block"] = np.array(blocks, dtype=np.int64)
+
+    temperatures = []
+    for index, medium in enumerate(media):
+        if medium.emission is None:
+            continue
+        emission = medium.emission
+        out["temperature_offset"][index] = sum(t.size for t in temperatures)
+        temperatures.append(np.asarray(emission.temperature.values, dtype=np.float32))
+        out["temperature_world_to_padded"][index] = _world_to_padded(emission.temperature)
+        out["temperature_map"][index] = (emission.temperature_scale, emission.temperature_offset, emission.intensity)
+    out["temperature_data"] = (np.concatenate([t.ravel() for t in temperatures]) if temperatures
+                               else np.zeros(1, np.float32))
+    out["temperature_shape"] = np.zeros((count, 3), dtype=np.int64)
+    for index, medium in enumerate(media):
+        if medium.emission is not None:
+            out["temperature_shape"][index] = medium.emission.temperature.values.shape
+    return out
+
+
+def luminance_scale(light: Light) -> float:
+    """Factor turning the light's spectrum shape into radiometric units with luminance Y = `strength`
+    (DESIGN.md: spectra are shapes, strength sets luminance).
+
+    A spectrum with no visible part (Y = 0, e.g. pure UV) is scaled instead so that its radiant
+    integral equals that of an equal-energy spectrum of luminance `strength`."""
+    luminance = float(colorimetry.spectrum_to_xyz(light.spectrum.values)[1])
+    if luminance > 1e-12:
+        return light.strength / luminance
+    radiant = light.spectrum.integral()
+    if radiant <= 0:
+        raise SpectralError(f"light {light.name or light.kind!r} has a spectrum that is zero everywhere")
+    return light.strength * (LAMBDA_MAX - LAMBDA_MIN) / radiant  # the constant-1 spectrum has Y = 1
+
+
+def _scene_centre_and_radius(media) -> tuple[np.ndarray, float]:
+    corners = []
+    for medium in media:
+        n = np.array(medium.density.values.shape, dtype=np.float64)
+        for corner in np.ndindex(2, 2, 2):
+            index = np.where(corner, n, -1.0)
+            corners.append((medium.density.index_to_world @ np.append(index, 1.0))[:3])
+    if not corners:
+        return np.zeros(3), 1.0
+    corners = np.array(corners)
+    centre = corners.mean(axis=0)
+    return centre, float(np.linalg.norm(corners - centre, axis=1).max())
+
+
+def _light_arrays(lights: tuple[Light, ...], media) -> dict:
+    if not lights and not any(medium.emission is not None for medium in media):
+        raise SpectralError("the scene has no lights: add a sun, environment, sky, point or spot light")
+    centre, radius = _scene_centre_and_radius(media)
+    count = len(lights)
+    out = {
+        "light_kind": np.array([LIGHT_KINDS[light.kind] for light in lights], dtype=np.int64),
+        "light_spd": np.array([light.spectrum.values * luminance_scale(light) for light in lights]).reshape(
+            count, GRID.size),
+        "light_spd_horizon": np.zeros((count, GRID.size)),
+        "light_dir": np.zeros((count, 3)),
+        "light_pos": np.zeros((count, 3)),
+        "light_cos": np.ones(count),
+        "light_smooth": np.zeros(count),
+    }
+    power = np.zeros(count)
+    for index, light in enumerate(lights):
+        luminance = light.strength
+        if light.kind == "sun":
+            out["light_dir"][index] = light.direction / np.linalg.norm(light.direction)
+            out["light_cos"][index] = np.cos(0.5 * light.angle)
+            power[index] = luminance
+        elif light.kind in ("environment", "sky"):
+            power[index] = np.pi * luminance
+            if light.kind == "sky":
+                horizon = light.horizon_spectrum or light.spectrum
+                out["light_spd_horizon"][index] = horizon.values * luminance_scale(light)
+        else:
+            out["light_pos"][index] = light.position
+            distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
+            power[index] = 4.0 * np.pi * luminance / distance**2
+            if light.kind == "spot":
+                axis = np.asarray(light.spot_direction, dtype=np.float64)
+                out["light_dir"][index] = axis / np.linalg.norm(axis)
+                cos_half = np.cos(0.5 * light.spot_size)
+                out["light_cos"][index] = cos_half
+                out["light_smooth"][index] = (1.0 - cos_half) * light.spot_blend
+    if count and power.sum() <= 0:
+        raise SpectralError("all lights have zero strength")
+    out["light_pmf"] = power / power.sum() if count else power
+    out["light_power"] = power
+    return out
+
+
+def wavelength_distribution(mode: str, light_spd: np.ndarray, light_power: np.ndarray, lo: float, hi: float):
+    """The hero-wavelength distribution over [lo, hi] for a `wavelength_sampling` mode."""
+    if mode in ("uniform", "uv"):
+        return sampling.uniform(lo, hi)
+    if mode == "visible":
+        return sampling.visible_distribution(lo, hi)
+    if mode == "d65_rejection":
+        from .spectra import illuminant
+
+        return sampling.from_spectrum(illuminant("D65"), lo, hi)
+    if mode == "light" and light_spd.shape[0]:
+        # Each light's radiometric SPD has luminance = strength; weight it by its geometric factor.
+        pairs = [(Spectrum(spd), power / max(float(colorimetry.spectrum_to_xyz(spd)[1]), 1e-30))
+                 for spd, power in zip(light_spd, light_power)]
+        return sampling.composite_light_distribution(pairs, lo, hi)
+    if mode == "light":  # emissive media only: no light spectra to follow
+        return sampling.visible_distribution(lo, hi)
+    raise SpectralError(f"unknown wavelength sampling {mode!r}")
+
+
+def camera_extent(camera) -> np.ndarray:
+    """Film extent (x, y) and shift (x, y) in camera space: at z = -1 (perspective) or absolute (ortho)."""
+    fit = camera.sensor_fit
+    if fit == "AUTO":
+        fit = "HORIZONTAL" if camera.width >= camera.height else "VERTICAL"
+    span = 2.0 * np.tan(0.5 * camera.fov) if camera.kind == "perspective" else camera.ortho_scale
+    aspect = camera.width / camera.height
+    extent_x, extent_y = (span, span / aspect) if fit == "HORIZONTAL" else (span * aspect, span)
+    return np.array([extent_x, extent_y, camera.shift_x * span, camera.shift_y * span])
+
+
+def default_band(settings) -> tuple[float, float]:
+    """The wavelength range the camera samples: the settings' range, from 250 nm in "uv" mode."""
+    lo = LAMBDA_MIN if settings.wavelength_sampling == "uv" else settings.lambda_min
+    return lo, settings.lambda_max
+
+
+def compile_scene(scene: Scene) -> KernelScene:
+    """The kernel data for the whole wavelength range; `with_band` restricts it to one band."""
+    settings = scene.settings
+    media = _media_arrays(scene.media)
+    lights = _light_arrays(scene.lights, scene.media)
+    camera = scene.camera
+    kernel_scene = KernelScene(
+        cam_to_world=np.asarray(camera.to_world, dtype=np.float64),
+        cam_kind=CAMERA_KINDS[camera.kind],
+        width=int(camera.width),
+        height=int(camera.height),
+        cam_extent=camera_extent(camera),
+        **media,
+        **lights,
+        lambda_cdf=np.zeros(GRID.size),
+        lambda_pdf=np.zeros(GRID.size - 1),
+        wavelengths_per_path=int(settings.wavelengths_per_path),
+        xyz_weights=colorimetry.xyz_weights(settings.cmf),
+        max_depth=int(settings.max_depth),
+        rr_depth=int(settings.rr_depth),
+    )
+    return with_band(kernel_scene, settings.wavelength_sampling, *default_band(settings))
+
+
+def with_band(kernel_scene: KernelScene, mode: str, lo: float, hi: float) -> KernelScene:
+    """The same kernel data with the hero wavelength drawn from [lo, hi] by `mode`."""
+    distribution = wavelength_distribution(mode, kernel_scene.light_spd, kernel_scene.light_power, lo, hi)
+    return kernel_scene._replace(lambda_cdf=np.asarray(distribution.cdf, dtype=np.float64),
+                                 lambda_pdf=np.asarray(distribution.bin_pdf, dtype=np.float64))

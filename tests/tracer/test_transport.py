@@ -1,0 +1,218 @@
+"""Light transport of the tracer against analytic results that cannot be tuned.
+
+Every statistical test uses a fixed seed and compares an image mean with its expected value within
+4 standard errors (estimated from the film's own per-pixel variance): a correct renderer fails such
+a test with probability about 6e-5; a biased one fails as soon as the bias exceeds the bound.
+"""
+
+import numpy as np
+import pytest
+
+from addon.tracer import colorimetry, spectra
+from addon.tracer.planck import planck_radiance
+from addon.tracer.render import render, render_unit
+from addon.tracer.compile import compile_scene
+from addon.tracer.errors import SpectralError
+from addon.tracer.scene import BlackbodyEmission, Fluorescence, Grid, Light
+from addon.tracer.wavelengths import GRID
+from tests.support import scenes as s
+
+SIGMAS = 4.0
+
+
+def image_mean_and_error(film, channel=1):
+    """Mean of one XYZ channel over the image and the standard error of that mean."""
+    values = film.xyz[..., channel]
+    error = np.sqrt(film.variance[..., channel].sum()) / values.size
+    return values.mean(), error
+
+
+def assert_within(film, expected, channel=1, sigmas=SIGMAS):
+    mean, error = image_mean_and_error(film, channel)
+    assert error > 0
+    assert abs(mean - expected) <= sigmas * error, f"mean {mean:.5f} vs expected {expected:.5f} ± {error:.5f}"
+    return mean, error
+
+
+def xyz_of(values_on_grid):
+    return colorimetry.spectrum_to_xyz(values_on_grid)
+
+
+@pytest.mark.parametrize("chromatic", [False, True], ids=["grey", "chromatic-extinction-and-g"])
+def test_white_furnace_returns_the_environment(chromatic):
+    """Albedo 1 inside a uniform environment: every pixel sees the environment's radiance, whatever
+    the extinction and anisotropy spectra (this exercises the spectral MIS with 4 wavelengths)."""
+    extinction = s.smooth_spectrum(4.0, 0.4) if chromatic else 2.0
+    g = s.smooth_spectrum(-0.3, 0.8) if chromatic else 0.0
+    box = s.box_grid()
+    scene = s.scene(s.perspective_camera(12, 12), [s.medium(box, extinction=extinction, g=g)],
+                    [s.environment()], spp=48, max_depth=500, rr_depth=500, seed=3)
+    film = render(scene).film
+    expected = xyz_of(np.ones(GRID.size))
+    for channel in range(3):
+        assert_within(film, expected[channel], channel)
+
+
+@pytest.mark.parametrize("band", [(440, 450), (540, 550), (640, 650)])
+def test_beer_lambert_transmittance_per_wavelength(band):
+    """Pure absorber between the camera and a uniform environment: Y = ∫ȳ e^{−σ(λ)d} / ∫ȳ per band."""
+    extinction = s.smooth_spectrum(1.5, 0.2)
+    thickness = 1.0
+    box = s.box_grid(cells=(8, 8, 8), size=(4.0, 4.0, thickness))
+    scene = s.scene(s.ortho_camera(8, 8, scale=1.0), [s.medium(box, extinction=extinction, albedo=0.0)],
+                    [s.environment()], spp=64, wavelength_sampling="uniform", wavelengths_per_path=4,
+                    lambda_min=band[0], lambda_max=band[1], seed=1)
+    film = render(scene).film
+    inside = (GRID >= band[0]) & (GRID <= band[1])
+    weights = colorimetry.xyz_weights("cie1931")[1] * inside
+    # The sampled estimator integrates over the band's bins; compare with the same quadrature.
+    transmitted = weights * np.exp(-extinction.values * thickness)
+    expected = _band_integral(transmitted, band)
+    assert_within(film, expected)
+
+
+def _band_integral(values_on_grid, band):
+    """∫ over [lo, hi] of a piecewise-linear function tabulated on the grid (trapezoid, 1 nm)."""
+    lo, hi = int(band[0] - GRID[0]), int(band[1] - GRID[0])
+    return float(np.trapezoid(values_on_grid[lo:hi + 1], GRID[lo:hi + 1]))
+
+
+def _trilinear(grid: Grid, points):
+    """Reference density look-up (cell centres, zero outside), written independently of the kernels."""
+    inverse = np.linalg.inv(grid.index_to_world)
+    index = points @ inverse[:3, :3].T + inverse[:3, 3]
+    padded = np.pad(grid.values.astype(np.float64), 1)
+    index = index + 1.0
+    base = np.floor(index).astype(int)
+    frac = index - base
+    total = np.zeros(len(points))
+    for corner in np.ndindex(2, 2, 2):
+        cell = base + corner
+        valid = np.all((cell >= 0) & (cell < padded.shape), axis=1)
+        weight = np.prod(np.where(corner, frac, 1 - frac), axis=1)
+        clipped = np.clip(cell, 0, np.array(padded.shape) - 1)
+        total += np.where(valid, weight * padded[clipped[:, 0], clipped[:, 1], clipped[:, 2]], 0.0)
+    return total
+
+
+def _optical_depth(grid, sigma, origin, direction, length, steps=400):
+    t = (np.arange(steps) + 0.5) * (length / steps)
+    return sigma * _trilinear(grid, origin + t[:, None] * direction).sum() * (length / steps)
+
+
+def test_single_scattering_of_a_thin_medium_matches_quadrature():
+    """Sun-lit thin box seen from above, single scattering only (max depth 1): the pixel radiance is
+    ∫ T_cam σ_s p_HG(θ) E_sun T_sun dt, evaluated here by quadrature on the same density field."""
+    sigma, albedo, g = 0.6, 0.7, 0.5
+    box = s.box_grid(cells=(10, 10, 10), size=(2.0, 2.0, 1.0))
+    to_sun = np.array([0.6, 0.0, 0.8])
+    scene = s.scene(s.ortho_camera(8, 8, scale=0.05), [s.medium(box, extinction=sigma, albedo=albedo, g=g)],
+                    [s.sun(to_sun)], spp=1024, max_depth=1, seed=7)
+    film = render(scene).film
+    # Reference along the central camera ray, travelling −z from z = 6.
+    direction = np.array([0.0, 0.0, -1.0])
+    cos_theta = float(direction @ (-to_sun))  # light travels along −to_sun; scattered towards the camera
+    hg = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * (-cos_theta)) ** 1.5)
+    steps = 400
+    ts = 5.0 + (np.arange(steps) + 0.5) * (2.0 / steps)  # z from 1 to −1 covers the box (|z| ≤ 0.5 + ramp)
+    radiance = 0.0
+    for t in ts:
+        point = np.array([0.0, 0.0, 6.0 - t])
+        density = _trilinear(box, point[None])[0]
+        if density == 0.0:
+            continue
+        camera_depth = _optical_depth(box, sigma, np.array([0.0, 0.0, 6.0]), direction, t)
+        sun_depth = _optical_depth(box, sigma, point, to_sun, 3.0)
+        radiance += np.exp(-camera_depth) * sigma * albedo * density * hg * np.exp(-sun_depth) * (2.0 / steps)
+    expected = radiance * xyz_of(np.ones(GRID.size))[1]
+    assert_within(film, expected)
+
+
+def test_fluorescence_reemits_the_absorbed_uv_energy():
+    """A wide thin slab whose only absorber is a fluorophore (quantum yield 1, UV excitation) under a
+    UV-only environment. Its visible radiance is QY · emission(λ) · ∫ L(λ') A(τ(λ')) dλ', where
+    4π·A(τ) = 4π ∫₀¹ μ (1 − e^{−τ/μ}) dμ is the absorbed fraction of the isotropic incident radiance:
+    emitted energy = absorbed energy."""
+    thickness, excitation_level, quantum_yield = 0.2, 2.0, 1.0
+    box = s.box_grid(cells=(64, 64, 8), size=(40.0, 40.0, thickness))
+    excitation = spectra.window(spectra.constant(excitation_level), 300, 340)
+    emission = spectra.gaussian(550, 20)
+    fluorescent = s.medium(box, extinction=0.0, albedo=1.0,
+                           fluorescence=Fluorescence(excitation, emission, quantum_yield))
+    uv = spectra.window(spectra.constant(1.0), 280, 350)
+    light = Light(kind="environment", spectrum=uv, strength=1.0)
+    scene = s.scene(s.ortho_camera(8, 8, scale=0.5), [fluorescent], [light], spp=1024, seed=5)
+    film = render(scene).film
+
+    from addon.tracer.compile import luminance_scale
+
+    uv_radiance = uv.values * luminance_scale(light)
+    mu = (np.arange(2000) + 0.5) / 2000
+    tau = excitation.values * thickness
+    absorbed_fraction = ((mu[None, :] * (1 - np.exp(-tau[:, None] / mu[None, :]))).mean(axis=1))
+    absorbed = float(np.sum(uv_radiance * absorbed_fraction))  # ∫ L A dλ, 1 nm grid
+    emitted = quantum_yield * emission.values / emission.integral() * absorbed
+    expected = xyz_of(emitted)[1]
+    assert_within(film, expected)
+
+
+def test_blackbody_emission_of_a_thin_hot_slab_matches_planck():
+    """An emitting-absorbing slab (albedo 0) at constant temperature seen face-on, no lights:
+    L(λ) = Planck(λ, T) · (1 − e^{−σd})."""
+    temperature, sigma, thickness = 1800.0, 0.3, 1.0
+    box = s.box_grid(cells=(8, 8, 8), size=(4.0, 4.0, thickness))
+    # The temperature grid extends beyond the density's edge ramps, so T is constant wherever σ > 0.
+    hot = BlackbodyEmission(temperature=s.box_grid(size=(6.0, 6.0, 3.0), density=temperature))
+    scene = s.scene(s.ortho_camera(8, 8, scale=1.0),
+                    [s.medium(box, extinction=sigma, albedo=0.0, emission=hot)], [], spp=256, seed=2)
+    film = render(scene).film
+    expected = xyz_of(planck_radiance(GRID, temperature) * (1 - np.exp(-sigma * thickness)))[1]
+    assert_within(film, expected)
+
+
+def test_scene_without_lights_or_emission_is_refused():
+    box = s.box_grid()
+    scene = s.scene(s.ortho_camera(), [s.medium(box)], [])
+    with pytest.raises(SpectralError, match="no lights"):
+        compile_scene(scene)
+
+
+def test_light_spd_importance_sampling_counts_direct_light_once():
+    """Camera looking straight at a fluorescent-lamp environment, λ drawn from the light's own SPD:
+    the image is the lamp's XYZ (no double counting) and has far less noise than uniform sampling."""
+    lamp = Light(kind="environment", spectrum=spectra.illuminant("FL11"), strength=1.0)
+    expected = xyz_of(lamp.spectrum.values) / xyz_of(lamp.spectrum.values)[1]
+    errors = {}
+    for mode in ("light", "uniform"):
+        scene = s.scene(s.perspective_camera(8, 8), [], [lamp], spp=16, wavelength_sampling=mode,
+                        wavelengths_per_path=1, seed=4)
+        film = render(scene).film
+        for channel in range(3):
+            assert_within(film, expected[channel], channel)
+        errors[mode] = image_mean_and_error(film, 1)[1]
+    assert errors["light"] < 0.5 * errors["uniform"]
+
+
+def test_split_passes_give_the_same_image_as_one_pass():
+    """Seeds depend on (seed, band, pixel, sample) only: any split of the samples sums to the same film."""
+    box = s.box_grid()
+    scene = s.scene(s.perspective_camera(6, 5), [s.medium(box, albedo=0.8, g=0.4)],
+                    [s.environment(), s.sun([1, 1, 1])], seed=11)
+    kernel_scene = compile_scene(scene)
+    whole = render_unit(kernel_scene, 0, (0, 8), (0, 0, 6, 5), 11)
+    first = render_unit(kernel_scene, 0, (0, 3), (0, 0, 6, 5), 11)
+    second = render_unit(kernel_scene, 0, (3, 8), (0, 0, 6, 5), 11)
+    left = render_unit(kernel_scene, 0, (0, 8), (0, 0, 3, 5), 11)
+    np.testing.assert_allclose(first[0] + second[0], whole[0], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(left[0], whole[0][:, :3], rtol=0, atol=0)
+    assert np.any(whole[0] != render_unit(kernel_scene, 0, (0, 8), (0, 0, 6, 5), 12)[0])
+
+
+def test_pixel_zero_is_the_top_left_corner():
+    """An absorbing block at the camera's upper left darkens the top-left pixels of the image."""
+    block = s.box_grid(cells=(4, 4, 4), size=(1.0, 1.0, 1.0), centre=(-1.0, 1.0, 0.0))
+    scene = s.scene(s.perspective_camera(16, 16, fov_degrees=50), [s.medium(block, extinction=50.0, albedo=0.0)],
+                    [s.environment()], spp=4, seed=1)
+    y = render(scene).film.xyz[..., 1]
+    assert y[:8, :8].mean() < 0.8 * y[8:, 8:].mean()
+    assert y[8:, :8].mean() > 0.95 and y[:8, 8:].mean() > 0.95
