@@ -157,16 +157,17 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
     return out
 
 
-def luminance_scale(light: Light) -> float:
-    """Factor turning the light's spectrum shape into radiometric units with luminance Y = `strength`
-    (DESIGN.md: spectra are shapes, strength sets luminance).
+def luminance_scale(light: Light, spectrum: Spectrum | None = None) -> float:
+    """Factor turning a light's spectrum shape (default: `light.spectrum`) into radiometric units with
+    luminance Y = `strength` (DESIGN.md: spectra are shapes, strength sets luminance).
 
     A spectrum with no visible part (Y = 0, e.g. pure UV) is scaled instead so that its radiant
     integral equals that of an equal-energy spectrum of luminance `strength`."""
-    luminance = float(colorimetry.spectrum_to_xyz(light.spectrum.values)[1])
+    spectrum = spectrum or light.spectrum
+    luminance = float(colorimetry.spectrum_to_xyz(spectrum.values)[1])
     if luminance > 1e-12:
         return light.strength / luminance
-    radiant = light.spectrum.integral()
+    radiant = spectrum.integral()
     if radiant <= 0:
         raise SpectralError(f"light {light.name or light.kind!r} has a spectrum that is zero everywhere")
     return light.strength * (LAMBDA_MAX - LAMBDA_MIN) / radiant  # the constant-1 spectrum has Y = 1
@@ -212,7 +213,7 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
             power[index] = np.pi * luminance
             if light.kind == "sky":
                 horizon = light.horizon_spectrum or light.spectrum
-                out["light_spd_horizon"][index] = horizon.values * luminance_scale(light)
+                out["light_spd_horizon"][index] = horizon.values * luminance_scale(light, horizon)
         else:
             out["light_pos"][index] = light.position
             distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)

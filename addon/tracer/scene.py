@@ -70,7 +70,8 @@ class Medium:
 @dataclass(frozen=True, eq=False)
 class Light:
     """One light. `spectrum` is a shape; `strength` sets its luminance Y:
-    sun: irradiance Y on a plane facing it; environment/sky: radiance Y (sky: of the zenith colour);
+    sun: irradiance Y on a plane facing it; environment: radiance Y; sky: radiance Y of both its zenith
+    colour (`spectrum`) and its horizon colour, blended linearly by the elevation's sine;
     point/spot: intensity Y (per steradian)."""
 
     kind: str  # "sun" | "environment" | "sky" | "point" | "spot"

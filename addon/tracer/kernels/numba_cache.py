@@ -1,8 +1,8 @@
 """Keeps Numba's on-disk cache of the kernels honest.
 
 Numba's `cache=True` checks only the cached function's own source file, but the kernels inline shared
-math from other modules (phase, sampling, rng, planck). This discards the cached kernels whenever any
-source file of the tracer changed since they were compiled.
+math from other modules. This discards the cached kernels whenever one of the sources they are compiled
+from changed since they were compiled.
 """
 
 import hashlib
@@ -11,11 +11,12 @@ from pathlib import Path
 TRACER = Path(__file__).resolve().parent.parent
 CACHE = Path(__file__).resolve().parent / "__pycache__"
 STAMP = CACHE / "kernel-sources.sha256"
+KERNEL_SOURCES = ("kernels/*.py", "phase.py", "sampling.py", "planck.py", "shared_math.py")
 
 
 def sources_digest() -> str:
     digest = hashlib.sha256()
-    for source in sorted(TRACER.rglob("*.py")):
+    for source in sorted(path for pattern in KERNEL_SOURCES for path in TRACER.glob(pattern)):
         digest.update(source.relative_to(TRACER).as_posix().encode())
         digest.update(source.read_bytes())
     return digest.hexdigest()

@@ -1,0 +1,1 @@
+"""Demo scenes and the script that renders them (`make demo`)."""

@@ -1,0 +1,58 @@
+"""The tracer's command line: renders a scene file to EXR/PNG/NPY/stats, validates scenes, and
+reports bad input with exit code 1 and a message, leaving existing files untouched."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from addon.tracer import image_io
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def run_cli(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, "-m", "addon.tracer", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_render_writes_every_requested_output(write_scene, tmp_path):
+    scene = write_scene()
+    out = tmp_path / "result" / "image.exr"
+    done = run_cli("render", scene, "--spp", 3, "--seed", 2, "--out", out, "--png", tmp_path / "image.png",
+                   "--npy", tmp_path / "image.npy", "--stats", tmp_path / "stats.json", "--threads", 1)
+    assert done.returncode == 0, done.stderr
+    channels = image_io.read_exr(out)
+    assert {"R", "G", "B", "A", "spectral.X", "spectral.Y", "spectral.Z", "variance.Y"} <= set(channels)
+    assert channels["spectral.Y"].shape == (6, 8)
+    xyz = np.load(tmp_path / "image.npy")
+    np.testing.assert_allclose(xyz[..., 1], channels["spectral.Y"], rtol=1e-6)
+    stats = json.loads((tmp_path / "stats.json").read_text())
+    assert stats["samples_per_pixel"] == 3 and stats["pixel_samples_per_second"] > 0
+    np.testing.assert_allclose(stats["mean_xyz"][1], xyz[..., 1].mean(), rtol=1e-5)
+    assert (tmp_path / "image.png").stat().st_size > 0
+    assert "%" in done.stderr  # the progress bar
+
+
+def test_validate_summarises_a_good_scene(write_scene):
+    done = run_cli("validate", write_scene())
+    assert done.returncode == 0, done.stderr
+    assert "cloud" in done.stdout
+
+
+def test_bad_scene_exits_1_with_a_message_and_keeps_existing_output(write_scene, scene_data, tmp_path):
+    scene_data["media"][0]["albedo"] = 1.5
+    scene = write_scene(scene_data)
+    out = tmp_path / "image.exr"
+    out.write_bytes(b"previous render")
+    done = run_cli("render", scene, "--out", out)
+    assert done.returncode == 1
+    assert "albedo must be within [0, 1]" in done.stderr and "Traceback" not in done.stderr
+    assert out.read_bytes() == b"previous render"
+
+
+def test_missing_scene_file_is_reported(tmp_path):
+    done = run_cli("render", tmp_path / "nowhere.json", "--out", tmp_path / "x.exr")
+    assert done.returncode == 1 and "nowhere.json" in done.stderr and "Traceback" not in done.stderr
