@@ -9,10 +9,32 @@ exactly (up to floating-point summation order).
 import numpy as np
 
 from . import colorimetry
+from .errors import SpectralError
+from .grids import available_memory
+
+# float64 Σ XYZ and Σ XYZ² per band, plus a tile's pair of accumulators and the XYZ, RGB and
+# variance images made at the end.
+ACCUMULATOR_BYTES = 2 * 3 * 8
+OUTPUT_BYTES = 3 * 3 * 8
+
+
+def film_bytes(width: int, height: int, bands: int = 1) -> int:
+    """Memory a render of this size needs for its film (not counting the scene's grids)."""
+    return int(width) * int(height) * (ACCUMULATOR_BYTES * (bands + 1) + OUTPUT_BYTES)
+
+
+def check_film_memory(width: int, height: int, bands: int = 1) -> None:
+    """Refuse a film larger than the memory available, saying how much it would need."""
+    needed = film_bytes(width, height, bands)
+    available = available_memory()
+    if available is not None and needed > available:
+        raise SpectralError(f"a {width}×{height} film needs {needed / 2**30:.1f} GiB of memory "
+                            f"({bands} band(s)), but only {available / 2**30:.1f} GiB is available")
 
 
 class Film:
     def __init__(self, width: int, height: int, bands: int = 1):
+        check_film_memory(width, height, bands)
         self.width, self.height, self.bands = int(width), int(height), int(bands)
         self.sum_xyz = np.zeros((self.bands, self.height, self.width, 3))
         self.sum_sq = np.zeros_like(self.sum_xyz)

@@ -13,7 +13,8 @@ import numpy as np
 
 from . import spectra
 from .errors import SpectralError
-from .grids import affine_matrix, available_memory, load_grid, save_grid_npy
+from .film import check_film_memory, film_bytes
+from .grids import affine_matrix, load_grid, save_grid_npy
 from .scene import BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
 from .spectra import Spectrum
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
@@ -31,7 +32,6 @@ WAVELENGTHS_PER_PATH = (1, 4)
 CMFS = ("cie1931", "wyman1", "wyman3")
 BACKENDS = ("numba", "numpy")
 # The film keeps XYZ sums and squared sums per pixel: 2 × 4 float64.
-FILM_BYTES_PER_PIXEL = 2 * 4 * 8
 
 _TOP = {"required": ("format", "version", "camera"), "optional": ("media", "lights", "render")}
 _CAMERA = {
@@ -133,13 +133,10 @@ def _camera(value, where: str) -> Camera:
 
 
 def _check_film_memory(width: int, height: int, where: str) -> None:
-    needed = width * height * FILM_BYTES_PER_PIXEL
-    available = available_memory()
-    if available is not None and needed > available:
-        raise SpectralError(
-            f"{where}: a {width}×{height} film needs {needed / 2**30:.1f} GiB of memory "
-            f"({FILM_BYTES_PER_PIXEL} bytes per pixel), but only {available / 2**30:.1f} GiB is available"
-        )
+    try:
+        check_film_memory(width, height)
+    except SpectralError as problem:
+        raise SpectralError(f"{where}: {problem}") from None
 
 
 def _medium(value, where: str, folder: Path) -> Medium:
@@ -532,7 +529,7 @@ def validate_scene(path) -> list[str]:
         lens = f"fov {np.degrees(camera.fov):.4g}°"
     else:
         lens = f"ortho scale {camera.ortho_scale:g}"
-    film = camera.width * camera.height * FILM_BYTES_PER_PIXEL
+    film = film_bytes(camera.width, camera.height)
     lines = [
         f"scene {path}: {FORMAT} version {VERSION}",
         f"camera: {camera.kind}, {camera.width}×{camera.height} pixels, {lens}, film {film / 2**20:.3g} MiB",

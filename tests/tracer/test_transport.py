@@ -216,3 +216,18 @@ def test_pixel_zero_is_the_top_left_corner():
     y = render(scene).film.xyz[..., 1]
     assert y[:8, :8].mean() < 0.8 * y[8:, 8:].mean()
     assert y[8:, :8].mean() > 0.95 and y[:8, 8:].mean() > 0.95
+
+
+def test_camera_inside_the_volume_still_sees_the_furnace():
+    """The camera may sit inside a medium: a white furnace seen from inside is still the environment."""
+    box = s.box_grid(cells=(6, 6, 6), size=(20.0, 20.0, 20.0))
+    scene = s.scene(s.perspective_camera(6, 6, distance=0.5), [s.medium(box, extinction=0.3)],
+                    [s.environment()], spp=64, max_depth=500, rr_depth=500, seed=9)
+    film = render(scene).film
+    assert_within(film, xyz_of(np.ones(GRID.size))[1])
+
+
+def test_absurd_resolution_is_refused_with_the_memory_it_needs():
+    scene = s.scene(s.perspective_camera(10**6, 10**6), [], [s.environment()])
+    with pytest.raises(SpectralError, match=r"1000000×1000000 film needs [0-9.]+ GiB"):
+        render(scene)
