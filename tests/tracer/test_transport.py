@@ -100,19 +100,36 @@ def _optical_depth(grid, sigma, origin, direction, length, steps=400):
     return sigma * _trilinear(grid, origin + t[:, None] * direction).sum() * (length / steps)
 
 
-def test_single_scattering_of_a_thin_medium_matches_quadrature():
-    """Sun-lit thin box seen from above, single scattering only (max depth 1): the pixel radiance is
-    ∫ T_cam σ_s p_HG(θ) E_sun T_sun dt, evaluated here by quadrature on the same density field."""
+SINGLE_SCATTERING_LIGHTS = {
+    # name: (light, function of a point -> (unit direction to the light, irradiance Y, distance))
+    "sun": (s.sun([0.6, 0.0, 0.8]), lambda x: (np.array([0.6, 0.0, 0.8]), 1.0, 3.0)),
+    # A 3° sun: NEE over its cone and phase-sampled rays hitting it are combined by MIS.
+    "sun-3-degrees": (s.sun([0.6, 0.0, 0.8], angle=np.radians(3.0)), lambda x: (np.array([0.6, 0.0, 0.8]), 1.0, 3.0)),
+    "point": (Light(kind="point", spectrum=spectra.constant(1.0), strength=4.0, position=np.array([2.0, 0.0, 2.0])),
+              lambda x: _towards(np.array([2.0, 0.0, 2.0]) - x, 4.0)),
+    "spot": (Light(kind="spot", spectrum=spectra.constant(1.0), strength=4.0, position=np.array([2.0, 0.0, 2.0]),
+                   spot_direction=np.array([-1.0, 0.0, -1.0]) / np.sqrt(2), spot_size=np.radians(60), spot_blend=0.1),
+             lambda x: _towards(np.array([2.0, 0.0, 2.0]) - x, 4.0)),
+}
+
+
+def _towards(offset, intensity):
+    distance = np.linalg.norm(offset)
+    return offset / distance, intensity / distance**2, distance
+
+
+@pytest.mark.parametrize("light_name", list(SINGLE_SCATTERING_LIGHTS))
+def test_single_scattering_of_a_thin_medium_matches_quadrature(light_name):
+    """A lit thin box seen from above, single scattering only (max depth 1): the pixel radiance is
+    ∫ T_cam σ_s p_HG(θ) E T_light dt, evaluated here by quadrature on the same density field."""
+    light, incident = SINGLE_SCATTERING_LIGHTS[light_name]
     sigma, albedo, g = 0.6, 0.7, 0.5
     box = s.box_grid(cells=(10, 10, 10), size=(2.0, 2.0, 1.0))
-    to_sun = np.array([0.6, 0.0, 0.8])
     scene = s.scene(s.ortho_camera(8, 8, scale=0.05), [s.medium(box, extinction=sigma, albedo=albedo, g=g)],
-                    [s.sun(to_sun)], spp=1024, max_depth=1, seed=7)
+                    [light], spp=1024, max_depth=1, seed=7)
     film = render(scene).film
     # Reference along the central camera ray, travelling −z from z = 6.
     direction = np.array([0.0, 0.0, -1.0])
-    cos_theta = float(direction @ (-to_sun))  # light travels along −to_sun; scattered towards the camera
-    hg = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * (-cos_theta)) ** 1.5)
     steps = 400
     ts = 5.0 + (np.arange(steps) + 0.5) * (2.0 / steps)  # z from 1 to −1 covers the box (|z| ≤ 0.5 + ramp)
     radiance = 0.0
@@ -121,9 +138,14 @@ def test_single_scattering_of_a_thin_medium_matches_quadrature():
         density = _trilinear(box, point[None])[0]
         if density == 0.0:
             continue
+        to_light, irradiance, distance = incident(point)
+        # Light travels along −to_light and leaves towards the camera along −direction.
+        cos_theta = float(to_light @ direction)
+        hg = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * cos_theta) ** 1.5)
         camera_depth = _optical_depth(box, sigma, np.array([0.0, 0.0, 6.0]), direction, t)
-        sun_depth = _optical_depth(box, sigma, point, to_sun, 3.0)
-        radiance += np.exp(-camera_depth) * sigma * albedo * density * hg * np.exp(-sun_depth) * (2.0 / steps)
+        light_depth = _optical_depth(box, sigma, point, to_light, distance)
+        radiance += (np.exp(-camera_depth) * sigma * albedo * density * hg * irradiance * np.exp(-light_depth)
+                     * (2.0 / steps))
     expected = radiance * xyz_of(np.ones(GRID.size))[1]
     assert_within(film, expected)
 
