@@ -35,6 +35,9 @@ INF = np.inf
 LIGHT_SUN, LIGHT_ENVIRONMENT, LIGHT_SKY, LIGHT_POINT, LIGHT_SPOT = 0, 1, 2, 3, 4
 PHASE_HG, PHASE_RAYLEIGH = 0, 1
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
+# Rows of the per-path spectral cache spec[medium, row, wavelength] (filled when wavelengths change).
+SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO = 0, 1, 2, 3, 4
+SPEC_ROWS = 5
 
 
 # ----------------------------------------------------------------------------- small helpers
@@ -157,7 +160,21 @@ def _albedo(ks, m, density, lam):
 
 
 @njit
-def _coefficients(ks, px, py, pz, lams, n, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
+def _fill_spectral_cache(ks, lams, n, spec):
+    """Tabulated spectra of every medium at the path's current wavelengths (looked up once per path
+    and after a fluorescent wavelength change, instead of at every collision)."""
+    for m in range(ks.density_scale.shape[0]):
+        for i in range(n):
+            lam = lams[i]
+            spec[m, SPEC_EXTINCTION, i] = _table(ks.extinction[m], lam)
+            spec[m, SPEC_EXCITATION, i] = _table(ks.excitation[m], lam)
+            spec[m, SPEC_EMISSION_PDF, i] = _table(ks.emission_pdf[m], lam)
+            spec[m, SPEC_ANISOTROPY, i] = _table(ks.anisotropy[m], lam)
+            spec[m, SPEC_ALBEDO, i] = _table(ks.albedo_table[m, 0], lam)
+
+
+@njit
+def _coefficients(ks, px, py, pz, lams, spec, n, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
     """Medium coefficients at a point for each path wavelength (summed over media), per-medium
     scattering / fluorescence coefficients (for choosing which medium scatters), and emission."""
     for i in range(n):
@@ -173,17 +190,18 @@ def _coefficients(ks, px, py, pz, lams, n, sigma_a, sigma_s, sigma_fl, emission,
                 medium_s[m, i] = 0.0
                 medium_fl[m, i] = 0.0
                 continue
-            lam = lams[i]
-            sigma_t = rho * _table(ks.extinction[m], lam)
-            scattering = sigma_t * _albedo(ks, m, rho / ks.density_scale[m], lam)
+            sigma_t = rho * spec[m, SPEC_EXTINCTION, i]
+            albedo = (spec[m, SPEC_ALBEDO, i] if ks.albedo_count[m] == 1
+                      else _albedo(ks, m, rho / ks.density_scale[m], lams[i]))
+            scattering = sigma_t * albedo
             plain_absorption = sigma_t - scattering
             medium_s[m, i] = scattering
-            medium_fl[m, i] = rho * ks.fluor_strength[m] * _table(ks.emission_pdf[m], lam)
+            medium_fl[m, i] = rho * ks.fluor_strength[m] * spec[m, SPEC_EMISSION_PDF, i]
             sigma_s[i] += scattering
-            sigma_a[i] += plain_absorption + rho * _table(ks.excitation[m], lam)
+            sigma_a[i] += plain_absorption + rho * spec[m, SPEC_EXCITATION, i]
             sigma_fl[i] += medium_fl[m, i]
             if temperature > 0.0:
-                emission[i] += plain_absorption * ks.temperature_map[m, 2] * planck_radiance(lam, temperature)
+                emission[i] += plain_absorption * ks.temperature_map[m, 2] * planck_radiance(lams[i], temperature)
 
 
 # ----------------------------------------------------------------------------- majorant tracking
@@ -298,14 +316,14 @@ def _tracker_advance(ks, state_i, state_f, t_end):
 # ----------------------------------------------------------------------------- phase functions
 
 @njit
-def _phase_pdf(ks, m, lam, cos_theta):
+def _phase_pdf(ks, m, g, cos_theta):
     if ks.phase_kind[m] == PHASE_RAYLEIGH:
         return rayleigh_pdf(cos_theta)
-    return hg_pdf(_table(ks.anisotropy[m], lam), cos_theta)
+    return hg_pdf(g, cos_theta)
 
 
 @njit
-def _mixture_phase(ks, medium_s, lams, n, cos_theta, out):
+def _mixture_phase(ks, medium_s, spec, n, cos_theta, out):
     """Phase pdf (= value) at each wavelength: the σ_s-weighted mixture of the media's phases."""
     for i in range(n):
         total = 0.0
@@ -313,7 +331,7 @@ def _mixture_phase(ks, medium_s, lams, n, cos_theta, out):
         for m in range(ks.density_scale.shape[0]):
             if medium_s[m, i] > 0.0:
                 total += medium_s[m, i]
-                weighted += medium_s[m, i] * _phase_pdf(ks, m, lams[i], cos_theta)
+                weighted += medium_s[m, i] * _phase_pdf(ks, m, spec[m, SPEC_ANISOTROPY, i], cos_theta)
         out[i] = weighted / total if total > 0.0 else 0.0
 
 
@@ -428,7 +446,7 @@ def _medium_scratch_fl(medium_fl):
 
 
 @njit
-def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, n, stream, transmittance, null_ratio,
+def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance, null_ratio,
                    state_i, state_f, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
     """Ratio tracking along a shadow ray: fills `transmittance` (per λ) and `null_ratio`, the product
     of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) per λ (for MIS)."""
@@ -451,7 +469,7 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, n, stream, transmitt
             _tracker_advance(ks, state_i, state_f, t_end)
             continue
         t += step
-        _coefficients(ks, ox + t * dx, oy + t * dy, oz + t * dz, lams, n,
+        _coefficients(ks, ox + t * dx, oy + t * dy, oz + t * dz, lams, spec, n,
                       sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
         alive = False
         for i in range(n):
@@ -465,7 +483,7 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, n, stream, transmitt
 
 
 @njit
-def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, n, stream, beta, r_u, radiance,
+def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, spec, n, stream, beta, r_u, radiance,
                 scratch, medium_s, medium_fl, state_i, state_f):
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
     transmittance, MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
@@ -485,13 +503,13 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, n, stream, beta, r_
         for i in range(n):
             phase_values[i] = 0.25 / math.pi
     else:
-        _mixture_phase(ks, medium_s, lams, n, cos_theta, phase_values)
+        _mixture_phase(ks, medium_s, spec, n, cos_theta, phase_values)
     any_light = False
     for i in range(n):
         if light_radiance[i] > 0.0 and phase_values[i] > 0.0 and beta[i] > 0.0:
             any_light = True
     if any_light:
-        _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, lams, n, stream, transmittance, null_ratio,
+        _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, lams, spec, n, stream, transmittance, null_ratio,
                        state_i, state_f, scratch[10], scratch[11], scratch[12], scratch[13],
                        _medium_scratch_s(medium_s), _medium_scratch_fl(medium_fl))
         light_pdf = ks.light_pmf[light] * direction_pdf
@@ -507,7 +525,7 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, n, stream, beta, r_
 
 
 @njit
-def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, beta, r_u, r_l, radiance,
+def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, r_l, radiance,
                 scratch, medium_s, medium_fl, state_i, state_f, xyz):
     """Trace one camera path; adds its XYZ estimate to `xyz`."""
     sigma_a, sigma_s, sigma_fl, emission = scratch[0], scratch[1], scratch[2], scratch[3]
@@ -525,6 +543,7 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, beta, r_u, r_l, r
         r_u[i] = 1.0
         r_l[i] = 1.0
         radiance[i] = 0.0
+    _fill_spectral_cache(ks, lams, n, spec)
 
     # Camera ray through the pixel (box filter), Blender camera conventions.
     ex, ey = ks.cam_extent[0], ks.cam_extent[1]
@@ -561,7 +580,7 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, beta, r_u, r_l, r
                 continue
             t += step
             qx, qy, qz = ox + t * dx, oy + t * dy, oz + t * dz
-            _coefficients(ks, qx, qy, qz, lams, n, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
+            _coefficients(ks, qx, qy, qz, lams, spec, n, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
             mean_r_u = _mean(r_u, n)
             for i in range(n):
                 if emission[i] > 0.0:
@@ -629,10 +648,11 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, beta, r_u, r_l, r
                 beta[i] = 0.0
                 r_u[i] = 0.0
                 r_l[i] = 0.0
+            _fill_spectral_cache(ks, lams, n, spec)
             isotropic = True
 
         if n_lights > 0:
-            _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, n, stream, beta, r_u, radiance,
+            _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, spec, n, stream, beta, r_u, radiance,
                         scratch, medium_s, medium_fl, state_i, state_f)
 
         # Phase sampling for the next direction (hero's phase; MIS pdfs at every wavelength).
@@ -644,13 +664,13 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, beta, r_u, r_l, r
             if ks.phase_kind[medium] == PHASE_RAYLEIGH:
                 new_cos = rayleigh_sample_cos(u1)
             else:
-                new_cos = hg_sample_cos(_table(ks.anisotropy[medium], lams[0]), u1)
+                new_cos = hg_sample_cos(spec[medium, SPEC_ANISOTROPY, 0], u1)
         nx, ny, nz = _direction_from_cos(dx, dy, dz, new_cos, u2)
         if isotropic:
             for i in range(n):
                 phase_values[i] = 0.25 / math.pi
         else:
-            _mixture_phase(ks, medium_s, lams, n, new_cos, phase_values)
+            _mixture_phase(ks, medium_s, spec, n, new_cos, phase_values)
         pdf0 = phase_values[0]
         if pdf0 <= 0.0:
             break
@@ -696,6 +716,7 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
         lam_cam = np.empty(MAX_LAMBDAS)
         pdf_cam = np.empty(MAX_LAMBDAS)
         lams = np.empty(MAX_LAMBDAS)
+        spec = np.empty((media, SPEC_ROWS, MAX_LAMBDAS))
         beta = np.empty(MAX_LAMBDAS)
         r_u = np.empty(MAX_LAMBDAS)
         r_l = np.empty(MAX_LAMBDAS)
@@ -711,7 +732,7 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
             stream[0] = path_key(seed, band, pixel, sample)
             stream[1] = 0
             xyz[:] = 0.0
-            _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, beta, r_u, r_l, radiance,
+            _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, r_l, radiance,
                         scratch, medium_s, medium_fl, state_i, state_f, xyz)
             for c in range(3):
                 sum_xyz[row, column, c] += xyz[c]
