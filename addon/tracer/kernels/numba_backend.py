@@ -38,6 +38,7 @@ EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
 # Rows of the per-path spectral cache spec[medium, row, wavelength] (filled when wavelengths change).
 SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO = 0, 1, 2, 3, 4
 SPEC_ROWS = 5
+SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
 
 
 # ----------------------------------------------------------------------------- small helpers
@@ -471,15 +472,22 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, tra
         t += step
         _coefficients(ks, ox + t * dx, oy + t * dy, oz + t * dz, lams, spec, n,
                       sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
-        alive = False
+        largest = 0.0
         for i in range(n):
             sigma_n = max(0.0, sigma_bar - sigma_a[i] - sigma_s[i])
             transmittance[i] *= sigma_n / sigma_bar
             null_ratio[i] *= sigma_n / (sigma_bar + sigma_fl[i])
-            if transmittance[i] > 0.0:
-                alive = True
-        if not alive:
+            largest = max(largest, transmittance[i])
+        if largest == 0.0:
             return
+        if largest < SHADOW_ROULETTE_BELOW:
+            # Russian roulette on faint shadow rays: unbiased, and stops long walks through dense media.
+            if _next(stream) < SHADOW_ROULETTE_STOP:
+                for i in range(n):
+                    transmittance[i] = 0.0
+                return
+            for i in range(n):
+                transmittance[i] /= 1.0 - SHADOW_ROULETTE_STOP
 
 
 @njit
