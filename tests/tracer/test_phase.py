@@ -8,34 +8,16 @@ Every chi-square test uses a fixed seed and passes when p > 1e-3: for a correct 
 import numpy as np
 import pytest
 from numba import njit as jit
-from scipy import integrate, stats
+from scipy import integrate
 
 from addon.tracer import phase
+from tests.support.statistics import chi_square_pvalue
 from addon.tracer.errors import SpectralError
 
 P_MIN = 1e-3
 N = 200_000
 COS_EDGES = np.linspace(-1.0, 1.0, 101)
 G_VALUES = [-0.7, 0.0, 0.3, 0.9]
-
-
-def chi_square_pvalue(observed, probabilities):
-    """p-value of Pearson's chi-square test of histogram counts against the bins' probabilities;
-    adjacent bins are pooled until each pool expects at least 5 samples."""
-    observed, probabilities = np.ravel(observed), np.ravel(probabilities)
-    expected = probabilities * observed.sum()
-    pools_o, pools_e, o, e = [], [], 0.0, 0.0
-    for oi, ei in zip(observed, expected):
-        o, e = o + oi, e + ei
-        if e >= 5:
-            pools_o.append(o)
-            pools_e.append(e)
-            o, e = 0.0, 0.0
-    pools_o[-1] += o
-    pools_e[-1] += e
-    pools_o, pools_e = np.array(pools_o), np.array(pools_e)
-    statistic = np.sum((pools_o - pools_e) ** 2 / pools_e)
-    return stats.chi2.sf(statistic, pools_o.size - 1)
 
 
 def cos_bin_probabilities(pdf):

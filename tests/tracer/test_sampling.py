@@ -7,9 +7,10 @@ Every chi-square test uses a fixed seed and passes when p > 1e-3: for a correct 
 import numpy as np
 import pytest
 from numba import njit as jit
-from scipy import integrate, stats
+from scipy import integrate
 
 from addon.tracer import sampling
+from tests.support.statistics import chi_square_pvalue as counts_pvalue
 from addon.tracer.errors import SpectralError
 from addon.tracer.spectra import constant, gaussian, illuminant, table
 from addon.tracer.wavelengths import GRID
@@ -20,23 +21,10 @@ UV_ONLY = table([250, 350], [1.0, 1.0])  # exactly zero above 350 nm
 
 
 def chi_square_pvalue(samples, edges, probabilities):
-    """p-value of Pearson's chi-square test of `samples` binned on `edges` against the bins' probabilities;
-    adjacent bins are pooled until each pool expects at least 5 samples."""
+    """p-value of Pearson's chi-square test of `samples` binned on `edges` against the bins' probabilities."""
     observed = np.histogram(samples, edges)[0]
     assert observed.sum() == samples.size, "samples outside the tested range"
-    expected = probabilities * samples.size
-    pools_o, pools_e, o, e = [], [], 0.0, 0.0
-    for oi, ei in zip(observed, expected):
-        o, e = o + oi, e + ei
-        if e >= 5:
-            pools_o.append(o)
-            pools_e.append(e)
-            o, e = 0.0, 0.0
-    pools_o[-1] += o
-    pools_e[-1] += e
-    pools_o, pools_e = np.array(pools_o), np.array(pools_e)
-    statistic = np.sum((pools_o - pools_e) ** 2 / pools_e)
-    return stats.chi2.sf(statistic, pools_o.size - 1)
+    return counts_pvalue(observed, probabilities)
 
 
 def quarter_nm_test(samples, pdf, lo, hi):

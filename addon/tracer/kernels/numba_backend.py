@@ -314,6 +314,22 @@ def _tracker_advance(ks, state_i, state_f, t_end):
             state_i[m, 0] = 2
 
 
+@njit
+def _tentative_collision(ks, stream, state_i, state_f, t):
+    """Delta tracking from ray parameter t: the next tentative collision (t, σ̄ there), or (INF, 0)
+    when the ray leaves every medium (or passes the tracker's t_max)."""
+    while True:
+        t_end, sigma_bar = _tracker_segment(ks, state_i, state_f)
+        if t_end == INF:
+            return INF, 0.0
+        if sigma_bar > 0.0:
+            step = -math.log(1.0 - _next(stream)) / sigma_bar
+            if t + step < t_end:
+                return t + step, sigma_bar
+        t = t_end
+        _tracker_advance(ks, state_i, state_f, t_end)
+
+
 # ----------------------------------------------------------------------------- phase functions
 
 @njit
@@ -457,19 +473,9 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, tra
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, state_i, state_f)
     t = 0.0
     while True:
-        t_end, sigma_bar = _tracker_segment(ks, state_i, state_f)
-        if t_end == INF:
+        t, sigma_bar = _tentative_collision(ks, stream, state_i, state_f, t)
+        if t == INF:
             return
-        if sigma_bar <= 0.0:
-            t = t_end
-            _tracker_advance(ks, state_i, state_f, t_end)
-            continue
-        step = -math.log(1.0 - _next(stream)) / sigma_bar
-        if t + step >= t_end:
-            t = t_end
-            _tracker_advance(ks, state_i, state_f, t_end)
-            continue
-        t += step
         _coefficients(ks, ox + t * dx, oy + t * dy, oz + t * dz, lams, spec, n,
                       sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
         largest = 0.0
@@ -574,19 +580,9 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, 
         _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, state_i, state_f)
         t = 0.0
         while True:
-            t_end, sigma_bar = _tracker_segment(ks, state_i, state_f)
-            if t_end == INF:
+            t, sigma_bar = _tentative_collision(ks, stream, state_i, state_f, t)
+            if t == INF:
                 break
-            if sigma_bar <= 0.0:
-                t = t_end
-                _tracker_advance(ks, state_i, state_f, t_end)
-                continue
-            step = -math.log(1.0 - _next(stream)) / sigma_bar
-            if t + step >= t_end:
-                t = t_end
-                _tracker_advance(ks, state_i, state_f, t_end)
-                continue
-            t += step
             qx, qy, qz = ox + t * dx, oy + t * dy, oz + t * dz
             _coefficients(ks, qx, qy, qz, lams, spec, n, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
             mean_r_u = _mean(r_u, n)
