@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from addon.tracer import distributed
+from addon.tracer import cli, distributed, image_io
 from addon.tracer import render as single
 from addon.tracer.errors import SpectralError
 from addon.tracer.film import Film
@@ -313,3 +313,32 @@ def test_a_worker_that_cannot_import_the_tracer_is_a_clear_error(fresh_loopback)
     fresh_loopback.start_workers(1, importable=False)
     with pytest.raises(SpectralError, match="cannot import the tracer.*PYTHONPATH"):
         distributed.render(small_scene(), scheduler=fresh_loopback.address)
+
+
+@pytest.mark.slow
+def test_cli_with_two_local_workers_writes_the_single_process_exr(write_scene, tmp_path):
+    from tests.tracer.conftest import tiny_scene_dict
+
+    data = tiny_scene_dict()
+    data["render"] = {"spp": 24, "bands": 2, "seed": 5}
+    scene_path = write_scene(data)
+    alone, farm = tmp_path / "alone.exr", tmp_path / "farm.exr"
+    assert cli.main(["render", str(scene_path), "--out", str(alone), "--quiet"]) == cli.EXIT_OK
+    run = subprocess.run([sys.executable, "-m", "addon.tracer", "render", str(scene_path), "--out", str(farm),
+                          "--workers", "2", "--tile-size", "3"],
+                         cwd=ROOT, env=_subprocess_env(), capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert "100.0%" in run.stderr  # the progress bar ran to the end
+    expected, actual = image_io.read_exr(alone), image_io.read_exr(farm)
+    assert sorted(expected) == sorted(actual)
+    for channel in expected:
+        assert np.array_equal(expected[channel], actual[channel]), channel
+
+
+def test_cli_rejects_distributed_options_without_a_farm(write_scene, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["render", str(write_scene()), "--out", str(tmp_path / "x.exr"), "--tile-size", "8"])
+    assert exit_.value.code == cli.EXIT_USAGE
+    with pytest.raises(SystemExit):
+        cli.main(["render", str(write_scene()), "--out", str(tmp_path / "x.exr"), "--workers", "2",
+                  "--scheduler", "tcp://127.0.0.1:1"])
