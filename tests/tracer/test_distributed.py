@@ -138,6 +138,11 @@ def test_unreachable_scheduler_is_a_clear_error_within_the_timeout(kind, request
     assert elapsed < timeout + 3.0, f"took {elapsed:.1f} s"
 
 
+def test_the_default_timeout_is_the_documented_one():
+    assert distributed.DEFAULT_TIMEOUT == 10.0
+    assert "10 s" in (ROOT / "docs" / "distributed.md").read_text(encoding="utf-8")
+
+
 # ------------------------------------------------------------------------------ a real loopback cluster
 
 
