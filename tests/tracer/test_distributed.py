@@ -5,6 +5,7 @@ command line, with PYTHONPATH set to this repository so the workers import `addo
 fixtures, even when a test fails. Scenes are tiny: the machine running CI may have two cores.
 """
 
+import json
 import os
 import signal
 import socket
@@ -171,22 +172,24 @@ class LoopbackCluster:
     """A `dask scheduler` and `dask worker` processes (without nannies, so a pid is the worker)."""
 
     def __init__(self, folder: Path):
-        self.folder, self.workers, self.scheduler = folder, [], None
+        self.folder, self.workers, self.scheduler, self.logs = folder, [], None, []
         self.env = _subprocess_env()
+
+    def _log(self, name: str):
+        self.logs.append(open(self.folder / name, "w"))
+        return self.logs[-1]
 
     def start_scheduler(self) -> str:
         scheduler_file = self.folder / "scheduler.json"
         self.scheduler = subprocess.Popen(
             _dask("dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                   "--scheduler-file", str(scheduler_file)),
-            env=self.env, cwd=self.folder, stdout=subprocess.DEVNULL, stderr=open(self.folder / "scheduler.log", "w"))
+            env=self.env, cwd=self.folder, stdout=subprocess.DEVNULL, stderr=self._log("scheduler.log"))
         deadline = time.monotonic() + START_TIMEOUT
         while time.monotonic() < deadline:
             if self.scheduler.poll() is not None:
                 raise RuntimeError(f"dask scheduler exited: {(self.folder / 'scheduler.log').read_text()}")
             try:
-                import json
-
                 self.address = json.loads(scheduler_file.read_text())["address"]
                 return self.address
             except (FileNotFoundError, ValueError, KeyError):
@@ -196,7 +199,7 @@ class LoopbackCluster:
     def start_workers(self, count: int, importable: bool = True) -> None:
         env = self.env if importable else {key: value for key, value in self.env.items() if key != "PYTHONPATH"}
         for index in range(count):
-            log = open(self.folder / f"worker{len(self.workers)}.log", "w")
+            log = self._log(f"worker{len(self.workers)}.log")
             self.workers.append(subprocess.Popen(
                 _dask("dask_worker", self.address, "--host", "127.0.0.1", "--nthreads", "1", "--no-nanny",
                       "--no-dashboard", "--death-timeout", "60", "--name", f"test-worker-{len(self.workers)}"),
@@ -211,6 +214,8 @@ class LoopbackCluster:
             _stop(process)
         if self.scheduler is not None:
             _stop(self.scheduler)
+        for log in self.logs:
+            log.close()
 
 
 @pytest.fixture(scope="module")
