@@ -1,5 +1,8 @@
 """Command line of the tracer: `python -m addon.tracer render|validate SCENE.json ...`.
 
+`render --workers N` renders on N local Dask worker processes, `render --scheduler tcp://HOST:PORT` on
+a running Dask scheduler's workers (docs/distributed.md); the image is the same as without them.
+
 Exit codes: 0 success, 1 bad input (a SpectralError, message on stderr), 2 usage error,
 130 interrupted (Ctrl-C; nothing is written).
 """
@@ -46,6 +49,15 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--threads", type=int, help="worker threads for the numba backend")
     render.add_argument("--stats", type=Path, help="write timing, samples per second and mean XYZ as JSON")
     render.add_argument("--quiet", action="store_true", help="no progress bar")
+    farm = render.add_mutually_exclusive_group()
+    farm.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                      help="render on the workers of this Dask scheduler (docs/distributed.md)")
+    farm.add_argument("--workers", type=int, metavar="N", help="render on N local Dask worker processes")
+    render.add_argument("--tile-size", type=int, metavar="PIXELS",
+                        help="tile edge of a distributed task in pixels (default: 64)")
+    render.add_argument("--timeout", type=float, metavar="SECONDS",
+                        help="give up on an unreachable scheduler, or one without workers, after this long "
+                             "(default: 10)")
     validate = commands.add_parser("validate", help="check a scene file and summarise it")
     validate.add_argument("scene", type=Path)
     return parser
@@ -58,8 +70,16 @@ def _render(args) -> int:
 
     scene = load_scene(args.scene)
     progress = None if args.quiet else ProgressBar()
-    result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend, threads=args.threads,
-                    progress=progress)
+    if args.scheduler is not None or args.workers is not None:
+        from . import distributed
+
+        options = {"tile_size": args.tile_size, "timeout": args.timeout}
+        result = distributed.render(scene, scheduler=args.scheduler, workers=args.workers, spp=args.spp,
+                                    seed=args.seed, backend=args.backend, threads=args.threads, progress=progress,
+                                    **{name: value for name, value in options.items() if value is not None})
+    else:
+        result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend, threads=args.threads,
+                        progress=progress)
     film = result.film
     image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
     if args.png:
@@ -83,7 +103,11 @@ def _validate(args) -> int:
 
 
 def main(argv=None) -> int:
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if args.command == "render" and args.scheduler is None and args.workers is None:
+        if args.tile_size is not None or args.timeout is not None:
+            parser.error("--tile-size and --timeout apply to distributed renders: add --scheduler or --workers")
     try:
         return _render(args) if args.command == "render" else _validate(args)
     except SpectralError as error:

@@ -1,0 +1,466 @@
+"""Distributed rendering on Dask: the same image as `render.render`, from one laptop to a render farm.
+
+The render is split into independent tasks, one per (wavelength band, pass, image tile). A task runs
+`render.render_unit` (a pure function of kernel scene, band, sample range, tile, seed and backend) on a
+Dask worker and returns the tile's accumulators. The sample ranges are the single-process render's
+passes (`render.pass_sizes`), and `PassMerger` adds each band's passes into the `Film` in pass order,
+whatever order the tasks complete in, so the film's floating-point sums are formed exactly as in
+`render.render`: the image is bit-for-bit identical for any number of workers, tile size or failure.
+
+The kernel scenes (one per band, sharing their big arrays) travel once to each worker
+(`Client.scatter(..., broadcast=True)`), not with every task, so no shared file system is needed.
+Dask is imported only here and only when a farm is opened: the rest of the tracer (and Blender, which
+does not bundle Dask) never needs it. See docs/distributed.md for starting schedulers and workers.
+"""
+
+import asyncio
+import hashlib
+import logging
+import os
+import time
+import uuid
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from . import render as single
+from .errors import SpectralError
+from .film import Film
+from .render import RenderResult
+from .scene import Scene
+
+DEFAULT_TIMEOUT = 10.0  # seconds to reach the scheduler and to wait for its first worker
+DEFAULT_TILE_SIZE = 64
+RETRIES = 2  # re-runs of a task that raised; tasks on workers that die are re-run by Dask anyway
+POLL_SECONDS = 0.02  # how often cancel() is asked while no task completes
+WORKER_CHECK_SECONDS = 1.0
+PACKAGES = ("numpy", "numba", "llvmlite")  # their versions must match between client and workers
+
+
+# ------------------------------------------------------------------------------------- the task plan
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One task: samples [begin, end) (pass `pass_index`) of `band` over tile `tile_index`."""
+
+    band: int
+    pass_index: int
+    tile_index: int
+    samples: tuple[int, int]
+    tile: tuple[int, int, int, int]  # x0, y0, width, height
+
+
+def image_tiles(width: int, height: int, tile_size: int) -> list[tuple[int, int, int, int]]:
+    """Tiles (x0, y0, width, height) covering the image row by row; edge tiles are smaller."""
+    if tile_size < 1:
+        raise SpectralError(f"tile size must be at least 1 pixel, got {tile_size}")
+    return [(x0, y0, min(tile_size, width - x0), min(tile_size, height - y0))
+            for y0 in range(0, height, tile_size) for x0 in range(0, width, tile_size)]
+
+
+def plan(width: int, height: int, bands: int, spp: int, tile_size: int) -> tuple[list[int], list, list[Unit]]:
+    """(pass sizes, tiles, units): the single-process render's passes × bands × tiles, in pass order."""
+    sizes = single.pass_sizes(spp)
+    tiles = image_tiles(width, height, tile_size)
+    units, begin = [], 0
+    for pass_index, size in enumerate(sizes):
+        for band in range(bands):
+            for tile_index, tile in enumerate(tiles):
+                units.append(Unit(band, pass_index, tile_index, (begin, begin + size), tile))
+        begin += size
+    return sizes, tiles, units
+
+
+class PassMerger:
+    """Adds unit results to a `Film` so that its sums are formed exactly as by `render.render`.
+
+    The single-process render adds whole-image passes of each band in pass order. Pixels are
+    independent, so adding a pass tile by tile gives the same per-pixel sums; what must be kept is
+    the order of passes within a band. Results that arrive early are buffered until every tile of
+    their pass has arrived and all earlier passes of their band have been added; the film's sample
+    count of a band therefore always describes every pixel (previews are consistent)."""
+
+    def __init__(self, film: Film, sizes: list[int], tiles: list[tuple[int, int, int, int]]):
+        self.film, self.sizes, self.tiles = film, list(sizes), list(tiles)
+        self.next_pass = [0] * film.bands
+        self.waiting: dict[tuple[int, int], dict[int, tuple[np.ndarray, np.ndarray]]] = {}
+
+    def add(self, unit: Unit, sum_xyz: np.ndarray, sum_sq: np.ndarray) -> None:
+        if unit.pass_index < self.next_pass[unit.band]:
+            raise ValueError(f"pass {unit.pass_index} of band {unit.band} was already added")
+        self.waiting.setdefault((unit.band, unit.pass_index), {})[unit.tile_index] = (sum_xyz, sum_sq)
+        band = unit.band
+        while self.next_pass[band] < len(self.sizes):
+            parts = self.waiting.get((band, self.next_pass[band]))
+            if parts is None or len(parts) < len(self.tiles):
+                break
+            del self.waiting[(band, self.next_pass[band])]
+            for tile_index in sorted(parts):
+                x0, y0, _, _ = self.tiles[tile_index]
+                self.film.add(band, y0, x0, *parts[tile_index])
+            self.film.count(band, self.sizes[self.next_pass[band]])
+            self.next_pass[band] += 1
+
+    @property
+    def complete(self) -> bool:
+        return all(done == len(self.sizes) for done in self.next_pass)
+
+
+# ------------------------------------------------------------------------------------ the worker side
+
+
+class SceneData:
+    """What is scattered to the workers: the kernel scene of each band.
+
+    One picklable object rather than a list, so that pickling keeps the arrays the bands share
+    (grids, majorants, light spectra) once instead of once per band."""
+
+    def __init__(self, band_scenes):
+        self.band_scenes = tuple(band_scenes)
+
+
+def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
+                seed: int, backend: str, threads: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The Dask task: `render.render_unit` for one band, with `threads` kernel threads (by default
+    the worker's cores shared among its Dask threads). Thread counts do not change the result."""
+    if backend == "numba":
+        from .kernels import numba_backend
+
+        numba_backend.set_threads(threads or _threads_per_task())
+    return single.render_unit(scene_data.band_scenes[band], band, samples, tile, seed, backend)
+
+
+def _threads_per_task() -> int:
+    import numba
+    from distributed import get_worker
+
+    try:
+        nthreads = get_worker().state.nthreads
+    except ValueError:  # not inside a worker
+        nthreads = 1
+    return max(1, numba.config.NUMBA_NUM_THREADS // max(nthreads, 1))
+
+
+def sources_digest() -> str:
+    """SHA-256 over every Python source of the tracer (this package), by relative path."""
+    tracer = Path(__file__).resolve().parent
+    digest = hashlib.sha256()
+    for source in sorted(tracer.rglob("*.py")):
+        digest.update(source.relative_to(tracer).as_posix().encode())
+        digest.update(source.read_bytes())
+    return digest.hexdigest()
+
+
+def environment() -> dict:
+    """What must match between the client and every worker for identical images: the tracer's
+    sources (all of them: simple and strict) and the versions of the numeric packages."""
+    versions = {}
+    for package in PACKAGES:
+        try:
+            versions[package] = metadata.version(package)
+        except metadata.PackageNotFoundError:
+            versions[package] = None
+    return {"tracer sources": sources_digest(), **versions}
+
+
+# ------------------------------------------------------------------------------------ the client side
+
+
+def _import_dask():
+    try:
+        import distributed
+    except ImportError as problem:
+        raise SpectralError(f"distributed rendering needs the 'dask' and 'distributed' packages "
+                            f"(pinned in requirements.lock): {problem}") from None
+    if not hasattr(distributed, "LocalCluster"):
+        raise SpectralError(f"the module {getattr(distributed, '__file__', distributed)!r} hides Dask's 'distributed' "
+                            f"package: rename it, or run from another folder")
+    return distributed
+
+
+def _probe(address: str, timeout: float) -> None:
+    """Connect once to `address` and hang up: a clear error within `timeout` instead of a hang."""
+    from distributed.comm import connect
+
+    async def attempt():
+        comm = await asyncio.wait_for(connect(address, timeout=timeout), timeout + 1.0)
+        await comm.close()
+
+    try:
+        asyncio.run(attempt())
+    except (OSError, asyncio.TimeoutError) as problem:
+        raise SpectralError(f"cannot reach the Dask scheduler at {address} within {timeout:g} s "
+                            f"(is `dask scheduler` running there and the port open?): {problem}") from None
+    except ValueError as problem:
+        raise SpectralError(f"{address!r} is not a Dask scheduler address (expected tcp://HOST:PORT): "
+                            f"{problem}") from None
+    except Exception as problem:  # something answered, but not a Dask scheduler
+        raise SpectralError(f"the service at {address} does not speak the Dask protocol "
+                            f"({type(problem).__name__}: {problem}); is it a Dask scheduler?") from None
+
+
+def _local_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1
+
+
+class RenderFarm:
+    """A connection to Dask workers: a remote scheduler (`scheduler="tcp://HOST:PORT"`) or a local
+    cluster of `workers` processes with one thread each (the default: one per core).
+
+    Open it once and render many scenes (an animation's frames are just scenes), then close it; or use
+    the module-level `render`, which opens and closes a farm around one render."""
+
+    def __init__(self, scheduler: str | None = None, workers: int | None = None, *,
+                 timeout: float = DEFAULT_TIMEOUT):
+        if scheduler is not None and workers is not None:
+            raise SpectralError("give either a scheduler address or a number of local workers, not both")
+        distributed = _import_dask()
+        self.timeout = float(timeout)
+        self.cluster = None
+        self.client = None
+        self.local_workers = None
+        try:
+            if scheduler is None:
+                count = _local_cores() if workers is None else int(workers)
+                if count < 1:
+                    raise SpectralError(f"the number of local workers must be at least 1, got {count}")
+                self.local_workers = count
+                try:
+                    self.cluster = distributed.LocalCluster(
+                        n_workers=count, threads_per_worker=1, processes=True, host="127.0.0.1",
+                        dashboard_address=None, silence_logs=logging.ERROR)
+                except Exception as problem:
+                    raise SpectralError(
+                        f"cannot start {count} local Dask worker processes ({problem}); a script that starts "
+                        f"them must keep its code under `if __name__ == '__main__':`, since each worker is a "
+                        f"new process that imports the script") from None
+                self.address = self.cluster.scheduler_address
+            else:
+                self.address = str(scheduler)
+                _probe(self.address, self.timeout)
+            try:
+                self.client = distributed.Client(self.cluster or self.address, timeout=self.timeout,
+                                                 set_as_default=False)
+            except Exception as problem:
+                raise SpectralError(f"cannot connect to the Dask scheduler at {self.address}: {problem}") from None
+            self.wait_for_workers()
+        except BaseException:
+            self.close()
+            raise
+
+    # -- lifetime
+
+    def close(self) -> None:
+        """Disconnect (and stop the local cluster, if this farm started one)."""
+        client, cluster, self.client, self.cluster = self.client, self.cluster, None, None
+        if client is not None:
+            try:
+                client.close()
+            except Exception:
+                pass
+        if cluster is not None:
+            try:
+                cluster.close()
+            except Exception:
+                pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *_):
+        self.close()
+
+    # -- workers
+
+    def workers(self) -> dict[str, int]:
+        """Connected workers and their thread counts."""
+        return dict(self.client.nthreads())
+
+    def wait_for_workers(self) -> None:
+        try:
+            self.client.wait_for_workers(1, timeout=self.timeout)
+        except Exception:
+            raise SpectralError(f"the Dask scheduler at {self.address} has no workers (waited {self.timeout:g} s): "
+                                f"start some with `dask worker {self.address}` (docs/distributed.md)") from None
+
+    def check_environment(self) -> None:
+        """The scheduler (which unpickles the tasks) and every worker must import this tracer and run the
+        same sources and numeric packages as this process."""
+        expected = environment()
+        found = {}
+        for role, run in (("scheduler", self.client.run_on_scheduler), ("workers", self.client.run)):
+            try:
+                answer = run(environment)
+            except Exception as problem:  # an ImportError over there arrives as a plain Exception naming it
+                if isinstance(problem, ImportError) or "No module named" in str(problem):
+                    raise SpectralError(
+                        f"the Dask {role} of {self.address} cannot import the tracer ({problem}): start the "
+                        f"scheduler and the workers from this repository's pinned environment with PYTHONPATH "
+                        f"set to the folder holding 'addon' (docs/distributed.md)") from None
+                raise SpectralError(f"cannot check the Dask {role} of {self.address}: {problem}") from None
+            found.update({f"scheduler {self.address}": answer} if role == "scheduler"
+                         else {f"worker {worker}": env for worker, env in answer.items()})
+        for who, env in sorted(found.items()):
+            different = [f"{name} {env.get(name)!r} (here {value!r})" for name, value in expected.items()
+                         if env.get(name) != value]
+            if different:
+                raise SpectralError(f"Dask {who} differs from this machine, so its pixels could differ: "
+                                    + "; ".join(different) + " (docs/distributed.md)")
+
+    # -- rendering
+
+    def render(self, scene: Scene, *, spp: int | None = None, seed: int | None = None, backend: str | None = None,
+               threads: int | None = None, tile_size: int = DEFAULT_TILE_SIZE, progress=None,
+               cancel=None) -> RenderResult:
+        """Render `scene` on the farm: the same `RenderResult` (and the same film, bit for bit) as
+        `render.render(scene, spp=spp, seed=seed, backend=backend)`.
+
+        `progress(film, fraction)` is called as tasks complete (the film holds every pass merged so
+        far); `cancel()` is asked between task completions and, when true, cancels the remaining tasks
+        (the result says `cancelled`). `threads` is the kernel threads per task (default: for a local
+        farm, the cores shared among its workers; otherwise each worker's cores over its Dask threads)."""
+        from distributed import as_completed
+
+        start = time.perf_counter()
+        settings = scene.settings
+        spp = settings.spp if spp is None else int(spp)
+        seed = settings.seed if seed is None else int(seed)
+        backend = backend or settings.backend
+        if spp < 1:
+            raise SpectralError(f"samples per pixel must be at least 1, got {spp}")
+        if backend not in single.BACKENDS:
+            raise SpectralError(f"unknown backend {backend!r}: choose one of {', '.join(single.BACKENDS)}")
+        if threads is None and self.local_workers is not None:
+            threads = max(1, _local_cores() // self.local_workers)
+        threads = int(threads) if threads else None
+
+        bands = single.band_scenes(scene)
+        camera = scene.camera
+        film = Film(camera.width, camera.height, len(bands))
+        sizes, tiles, units = plan(camera.width, camera.height, len(bands), spp, int(tile_size))
+        merger = PassMerger(film, sizes, tiles)
+
+        self.wait_for_workers()
+        self.check_environment()
+        client = self.client
+        [scene_future] = client.scatter([SceneData(bands)], broadcast=True, hash=False)
+        setup_seconds = time.perf_counter() - start
+
+        token = uuid.uuid4().hex[:12]
+        futures = {}
+        for unit in units:
+            future = client.submit(render_task, scene_future, unit.band, unit.samples, unit.tile, seed, backend,
+                                   threads, key=f"spectral-unit-{token}-{unit.band}-{unit.pass_index}-"
+                                                f"{unit.tile_index}",
+                                   priority=-unit.pass_index, retries=RETRIES)
+            futures[future] = unit
+        completed = as_completed(list(futures), loop=client.loop)
+        done, cancelled = 0, False
+        last_check, alone_since = time.perf_counter(), None
+        try:
+            while done < len(units):
+                if cancel is not None and cancel():
+                    cancelled = True
+                    break
+                batch = completed.next_batch(block=False)
+                if not batch:
+                    now = time.perf_counter()
+                    if now - last_check >= WORKER_CHECK_SECONDS:
+                        last_check = now
+                        alone_since = self._check_alive(alone_since, now)
+                    time.sleep(POLL_SECONDS)
+                    continue
+                alone_since = None
+                for future in batch:
+                    if future.status == "error":
+                        raise _task_error(future, futures[future], self.address)
+                try:
+                    results = client.gather(batch)
+                except Exception as problem:
+                    raise SpectralError(f"collecting render results from {self.address} failed: "
+                                        f"{type(problem).__name__}: {problem}") from problem
+                for future, (sum_xyz, sum_sq) in zip(batch, results):
+                    merger.add(futures.pop(future), sum_xyz, sum_sq)
+                    future.release()
+                done += len(batch)
+                if progress is not None:
+                    progress(film, done / len(units))
+        finally:
+            completed.clear()
+            if futures:
+                client.cancel(list(futures))
+            futures.clear()
+            scene_future.release()
+        if not cancelled and not merger.complete:
+            raise SpectralError("internal error: every task completed but the film is missing passes")
+
+        seconds = time.perf_counter() - start
+        pixel_samples = int(film.samples.sum()) * camera.width * camera.height
+        stats = {
+            "seconds": seconds,
+            "samples_per_pixel": int(film.samples.min()) if film.samples.size else 0,
+            "pixel_samples_per_second": pixel_samples / seconds if seconds > 0 else 0.0,
+            "mean_xyz": film.xyz.reshape(-1, 3).mean(axis=0).tolist(),
+            "backend": backend,
+            "bands": len(bands),
+            "scheduler": self.address,
+            "workers": len(self.workers()),
+            "tasks": len(units),
+            "tasks_done": done,
+            "tile_size": int(tile_size),
+            "setup_seconds": setup_seconds,
+        }
+        return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=stats)
+
+    def _check_alive(self, alone_since, now):
+        """Raise when the scheduler has had no workers for `timeout` seconds during a render."""
+        try:
+            count = len(self.client.nthreads())
+        except Exception as problem:
+            raise SpectralError(f"lost the Dask scheduler at {self.address}: {problem}") from None
+        if count:
+            return None
+        alone_since = now if alone_since is None else alone_since
+        if now - alone_since > self.timeout:
+            raise SpectralError(f"every Dask worker of {self.address} has left and none came back within "
+                                f"{self.timeout:g} s; the render is incomplete")
+        return alone_since
+
+
+def _task_error(future, unit: Unit, address: str) -> SpectralError:
+    from distributed.scheduler import KilledWorker
+
+    problem = future.exception()
+    where = f"band {unit.band}, samples {unit.samples[0]}–{unit.samples[1]}, tile {unit.tile}"
+    if isinstance(problem, SpectralError):
+        return problem
+    if isinstance(problem, KilledWorker):
+        return SpectralError(f"the render task for {where} was running on {problem.allowed_failures + 1} Dask "
+                             f"workers of {address} that died (out of memory?); giving up")
+    if isinstance(problem, ImportError):
+        return SpectralError(f"a Dask worker of {address} cannot import the tracer ({problem}): start it with "
+                             f"PYTHONPATH set to the folder holding 'addon' (docs/distributed.md)")
+    error = SpectralError(f"the render task for {where} failed on a Dask worker of {address}: "
+                          f"{type(problem).__name__}: {problem}")
+    error.__cause__ = problem
+    return error
+
+
+def render(scene: Scene, *, scheduler: str | None = None, workers: int | None = None, spp: int | None = None,
+           seed: int | None = None, backend: str | None = None, threads: int | None = None,
+           tile_size: int = DEFAULT_TILE_SIZE, progress=None, cancel=None,
+           timeout: float = DEFAULT_TIMEOUT) -> RenderResult:
+    """Render `scene` on Dask and return the same `RenderResult` as `render.render` (identical film).
+
+    `scheduler="tcp://HOST:PORT"` uses a running Dask scheduler and its workers; otherwise a local
+    cluster of `workers` processes (default: one per core, one thread each) is started and stopped.
+    An unreachable scheduler, or one without workers, raises SpectralError within `timeout` seconds."""
+    with RenderFarm(scheduler, workers, timeout=timeout) as farm:
+        return farm.render(scene, spp=spp, seed=seed, backend=backend, threads=threads, tile_size=tile_size,
+                           progress=progress, cancel=cancel)
