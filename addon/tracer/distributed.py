@@ -28,7 +28,7 @@ import numpy as np
 from . import render as single
 from .errors import SpectralError
 from .film import Film
-from .render import RenderResult
+from .render import RenderResult, render_stats
 from .scene import Scene
 
 DEFAULT_TIMEOUT = 10.0  # seconds to reach the scheduler and to wait for its first worker
@@ -401,14 +401,8 @@ class RenderFarm:
             raise SpectralError("internal error: every task completed but the film is missing passes")
 
         seconds = time.perf_counter() - start
-        pixel_samples = int(film.samples.sum()) * camera.width * camera.height
         stats = {
-            "seconds": seconds,
-            "samples_per_pixel": int(film.samples.min()) if film.samples.size else 0,
-            "pixel_samples_per_second": pixel_samples / seconds if seconds > 0 else 0.0,
-            "mean_xyz": film.xyz.reshape(-1, 3).mean(axis=0).tolist(),
-            "backend": backend,
-            "bands": len(bands),
+            **render_stats(film, seconds, backend),
             "scheduler": self.address,
             "workers": len(self.workers()),
             "tasks": len(units),

@@ -108,13 +108,17 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
             break
         begin += size
     seconds = time.perf_counter() - start
-    pixel_samples = int(film.samples.sum()) * camera.width * camera.height
-    stats = {
+    return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend))
+
+
+def render_stats(film: Film, seconds: float, backend: str) -> dict:
+    """Timing, throughput and mean XYZ of a finished (or cancelled) render, for --stats and the UI."""
+    pixel_samples = int(film.samples.sum()) * film.width * film.height
+    return {
         "seconds": seconds,
         "samples_per_pixel": int(film.samples.min()) if film.samples.size else 0,
         "pixel_samples_per_second": pixel_samples / seconds if seconds > 0 else 0.0,
         "mean_xyz": film.xyz.reshape(-1, 3).mean(axis=0).tolist(),
         "backend": backend,
-        "bands": len(bands),
+        "bands": film.bands,
     }
-    return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=stats)
