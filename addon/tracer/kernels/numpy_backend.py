@@ -1,0 +1,677 @@
+"""NumPy backend: the spectral null-scattering volume path tracer as a vectorised wavefront.
+
+It runs the algorithm of `numba_backend` (see its docstring) with no compiled dependency, and is the
+second engine that validates the Numba kernel. Paths are not traced one at a time: the paths of a tile
+(in chunks of at most `CHUNK_PATHS`) are arrays of path states (`_Batch`, one row per path) that step
+together and are compacted as they end. One `_bounce` takes every live path through free flight, escape,
+the scattering or fluorescent vertex, next-event estimation, phase sampling and Russian roulette.
+
+Free flight and shadow rays traverse each medium's majorant grid block by block, a DDA vectorised over
+rays (`_tracker_*`, the same state machine as the Numba kernel's): each loop iteration moves every ray by
+one segment or one tentative collision, and rays that are done leave the batch.
+
+Every path draws from the same counter-based stream (`rng.path_key`, `rng.uniform`), in the same order
+and with the same arithmetic as the Numba kernel, so the two backends trace the same paths: images agree
+pixel by pixel up to floating-point differences (transcendental functions may differ in the last bit,
+which can send a path down another branch). Masked lanes may compute values that are then discarded
+(1/σ̄ where σ̄ = 0, say), so floating-point warnings are silenced while tracing.
+"""
+
+import numpy as np
+
+from ..compile import CAMERA_KINDS, LIGHT_KINDS, PHASE_KINDS
+from ..phase import hg_pdf, hg_sample_cos, orthonormal_basis, rayleigh_pdf, rayleigh_sample_cos
+from ..planck import planck_radiance
+from ..sampling import pdf_binned, sample_binned
+from ..wavelengths import LAMBDA_MIN
+from .rng import path_key, uniform
+
+CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
+INF = np.inf
+INV_FOUR_PI = 0.25 / np.pi
+EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
+PHASE_RAYLEIGH = PHASE_KINDS["rayleigh"]
+PERSPECTIVE = CAMERA_KINDS["perspective"]
+SUN, ENVIRONMENT, SKY, SPOT = LIGHT_KINDS["sun"], LIGHT_KINDS["environment"], LIGHT_KINDS["sky"], LIGHT_KINDS["spot"]
+
+
+class _Batch:
+    """A struct of arrays with one row per path (or ray); `take` keeps some rows, in a new batch."""
+
+    def __init__(self, **arrays):
+        vars(self).update(arrays)
+
+    def take(self, rows):
+        return _Batch(**{name: array[rows] for name, array in vars(self).items()})
+
+    def __len__(self):
+        return len(next(iter(vars(self).values())))
+
+
+def _draw(paths, rows=slice(None)):
+    """The next uniform number of each selected path's stream (`paths.key`, `paths.counter`)."""
+    u = uniform(paths.key[rows], paths.counter[rows])
+    paths.counter[rows] += np.uint64(1)
+    return u
+
+
+# ----------------------------------------------------------------------------- small helpers
+
+def _table(row, lam):
+    """Linear interpolation of a per-nanometre table at wavelengths `lam` (0 outside the grid)."""
+    position = lam - LAMBDA_MIN
+    inside = (position >= 0.0) & (position <= row.shape[0] - 1)
+    index = np.minimum(np.where(inside, position, 0.0).astype(np.int64), row.shape[0] - 2)
+    frac = position - index
+    return np.where(inside, row[index] * (1.0 - frac) + row[index + 1] * frac, 0.0)
+
+
+def _table_rows(table, rows, lam):
+    """`_table(table[rows[k]], lam[k])` for each path k (lam of shape (paths, n))."""
+    position = lam - LAMBDA_MIN
+    size = table.shape[-1]
+    inside = (position >= 0.0) & (position <= size - 1)
+    index = np.minimum(np.where(inside, position, 0.0).astype(np.int64), size - 2)
+    frac = position - index
+    rows = rows[:, None]
+    return np.where(inside, table[rows, index] * (1.0 - frac) + table[rows, index + 1] * frac, 0.0)
+
+
+def _transform_point(m, p):
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    return np.stack([m[k, 0] * x + m[k, 1] * y + m[k, 2] * z + m[k, 3] for k in range(3)], axis=1)
+
+
+def _transform_vector(m, v):
+    x, y, z = v[:, 0], v[:, 1], v[:, 2]
+    return np.stack([m[k, 0] * x + m[k, 1] * y + m[k, 2] * z for k in range(3)], axis=1)
+
+
+def _dot(a, b):
+    return a[:, 0] * b[0] + a[:, 1] * b[1] + a[:, 2] * b[2]
+
+
+def _normalize(v):
+    inv = 1.0 / np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
+    return v * inv[:, None]
+
+
+def _direction_from_cos(d, cos_theta, u):
+    """Unit vectors at angle acos(cos_theta) from the rows of `d`, azimuth 2πu (the Numba kernel's frame
+    and arithmetic, so that both backends turn the same numbers into the same directions)."""
+    t1, t2 = orthonormal_basis((d[:, 0], d[:, 1], d[:, 2]))
+    sin_theta = np.sqrt(np.maximum(0.0, 1.0 - cos_theta * cos_theta))
+    phi = 2.0 * np.pi * u
+    cp, sp = np.cos(phi) * sin_theta, np.sin(phi) * sin_theta
+    return np.stack([cp * t1[k] + sp * t2[k] + cos_theta * d[:, k] for k in range(3)], axis=1)
+
+
+def _mean(values):
+    """Mean over the wavelengths (columns), summed in order as in the Numba kernel."""
+    total = np.zeros(values.shape[0])
+    for i in range(values.shape[1]):
+        total = total + values[:, i]
+    return total / values.shape[1]
+
+
+# ----------------------------------------------------------------------------- volume look-ups
+
+def _trilinear(data, offset, shape, points):
+    """Trilinear interpolation of cell-centre samples at index-space points (rows), zero outside."""
+    floor = np.floor(points)
+    base = floor.astype(np.int64)
+    frac = points - floor
+    total = np.zeros(points.shape[0])
+    for corner in range(8):
+        bits = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1)
+        cell = [base[:, axis] + bits[axis] for axis in range(3)]
+        valid = np.ones(points.shape[0], dtype=bool)
+        for axis in range(3):
+            valid &= (cell[axis] >= 0) & (cell[axis] < shape[axis])
+        weight = [frac[:, axis] if bits[axis] else 1.0 - frac[:, axis] for axis in range(3)]
+        index = np.where(valid, offset + (cell[0] * shape[1] + cell[1]) * shape[2] + cell[2], offset)
+        total += np.where(valid, weight[0] * weight[1] * weight[2] * data[index], 0.0)
+    return total
+
+
+def _density(ks, m, points):
+    q = _transform_point(ks.world_to_padded[m], points)
+    return _trilinear(ks.density_data, ks.density_offset[m], ks.density_shape[m], q - 1.0)
+
+
+def _temperature(ks, m, points):
+    q = _transform_point(ks.temperature_world_to_padded[m], points)
+    raw = _trilinear(ks.temperature_data, ks.temperature_offset[m], ks.temperature_shape[m], q - 1.0)
+    return raw * ks.temperature_map[m, 0] + ks.temperature_map[m, 1]
+
+
+def _albedo(ks, m, density, lams):
+    """Single-scattering albedo at raw densities (rows) and wavelengths (columns): the density levels'
+    tables interpolated linearly, clamped outside the levels."""
+    count = ks.albedo_count[m]
+    levels = ks.albedo_densities[m, :count]
+    table = ks.albedo_table[m]
+    lowest = _table(table[0], lams)
+    if count == 1:
+        return lowest
+    upper = np.clip(np.searchsorted(levels, density, side="left"), 1, count - 1)
+    t = ((density - levels[upper - 1]) / (levels[upper] - levels[upper - 1]))[:, None]
+    between = (1.0 - t) * _table_rows(table, upper - 1, lams) + t * _table_rows(table, upper, lams)
+    highest = _table(table[count - 1], lams)
+    return np.where((density <= levels[0])[:, None], lowest,
+                    np.where((density >= levels[count - 1])[:, None], highest, between))
+
+
+def _coefficients(ks, points, lams):
+    """Medium coefficients at points (rows) for each path wavelength (columns), summed over media;
+    per-medium scattering and fluorescence coefficients (which medium scatters); thermal emission."""
+    count, n = lams.shape
+    media = ks.density_scale.shape[0]
+    out = _Batch(sigma_a=np.zeros((count, n)), sigma_s=np.zeros((count, n)), sigma_fl=np.zeros((count, n)),
+                 emission=np.zeros((count, n)), medium_s=np.zeros((count, media, n)),
+                 medium_fl=np.zeros((count, media, n)))
+    for m in range(media):
+        rho = _density(ks, m, points) * ks.density_scale[m]
+        rows = np.flatnonzero(rho > 0.0)
+        if rows.size == 0:
+            continue
+        lam, r = lams[rows], rho[rows, None]
+        sigma_t = r * _table(ks.extinction[m], lam)
+        scattering = sigma_t * _albedo(ks, m, rho[rows] / ks.density_scale[m], lam)
+        plain_absorption = sigma_t - scattering
+        fluorescence = r * ks.fluor_strength[m] * _table(ks.emission_pdf[m], lam)
+        out.medium_s[rows, m] = scattering
+        out.medium_fl[rows, m] = fluorescence
+        out.sigma_s[rows] += scattering
+        out.sigma_a[rows] += plain_absorption + r * _table(ks.excitation[m], lam)
+        out.sigma_fl[rows] += fluorescence
+        if ks.temperature_offset[m] >= 0:
+            temperature = _temperature(ks, m, points[rows])[:, None]
+            glow = plain_absorption * ks.temperature_map[m, 2] * planck_radiance(lam, temperature)
+            out.emission[rows] += np.where(temperature > 0.0, glow, 0.0)
+    return out
+
+
+# ----------------------------------------------------------------------------- majorant tracking
+
+def _tracker_start(ks, origins, directions, t_max):
+    """One DDA per ray and medium over the medium's majorant blocks, in padded index space.
+
+    phase (rays, media): 0 before entry, 1 inside, 2 done; t_entry, t_exit: the ray's span in the
+    medium's block grid; cell, step, t_next, t_delta (rays, media, 3): the usual DDA state;
+    lo, ld: the ray's origin and direction in the medium's padded index space."""
+    count, media = origins.shape[0], ks.density_scale.shape[0]
+    tracker = _Batch(phase=np.zeros((count, media), dtype=np.int8),
+                     t_entry=np.zeros((count, media)), t_exit=np.zeros((count, media)),
+                     cell=np.zeros((count, media, 3), dtype=np.int64), step=np.zeros((count, media, 3), dtype=np.int64),
+                     t_next=np.zeros((count, media, 3)), t_delta=np.zeros((count, media, 3)),
+                     lo=np.zeros((count, media, 3)), ld=np.zeros((count, media, 3)))
+    for m in range(media):
+        lo = _transform_point(ks.world_to_padded[m], origins)
+        ld = _transform_vector(ks.world_to_padded[m], directions)
+        t0, t1 = np.zeros(count), np.broadcast_to(t_max, (count,)).astype(np.float64)
+        for axis in range(3):
+            o, d = lo[:, axis], ld[:, axis]
+            upper = ks.majorant_shape[m, axis] * ks.majorant_block[m]
+            ta, tb = (0.0 - o) / d, (upper - o) / d
+            swap = ta > tb
+            ta, tb = np.where(swap, tb, ta), np.where(swap, ta, tb)
+            parallel = d == 0.0
+            outside = parallel & ((o < 0.0) | (o >= upper))
+            t0 = np.where(parallel, t0, np.maximum(t0, ta))
+            t1 = np.where(outside, -1.0, np.where(parallel, t1, np.minimum(t1, tb)))
+        tracker.phase[:, m] = np.where(t0 >= t1, 2, 0)
+        tracker.t_entry[:, m], tracker.t_exit[:, m] = t0, t1
+        tracker.lo[:, m], tracker.ld[:, m] = lo, ld
+    return tracker
+
+
+def _tracker_enter(ks, tracker, rays, media):
+    """Put the DDAs of the (ray, medium) pairs `rays[k]`, `media[k]` into their first block."""
+    t = tracker.t_entry[rays, media][:, None]
+    block = ks.majorant_block[media][:, None]
+    o, d = tracker.lo[rays, media], tracker.ld[rays, media]
+    cell = np.minimum(np.maximum(np.floor((o + t * d) / block).astype(np.int64), 0), ks.majorant_shape[media] - 1)
+    up, down = d > 0.0, d < 0.0
+    tracker.cell[rays, media] = cell
+    tracker.step[rays, media] = np.where(up, 1, np.where(down, -1, 0))
+    tracker.t_next[rays, media] = np.where(up, ((cell + 1) * block - o) / d,
+                                           np.where(down, (cell * block - o) / d, INF))
+    tracker.t_delta[rays, media] = np.where(up, block / d, np.where(down, -block / d, INF))
+    tracker.phase[rays, media] = 1
+
+
+def _tracker_boundary(tracker):
+    """(rays, media): the ray parameter where each medium's current majorant changes next."""
+    inside = np.minimum(tracker.t_exit, tracker.t_next.min(axis=2))
+    return np.where(tracker.phase == 0, tracker.t_entry, np.where(tracker.phase == 1, inside, INF))
+
+
+def _tracker_segment(ks, tracker):
+    """(end of each ray's current segment, combined majorant σ̄ on it)."""
+    t_end = _tracker_boundary(tracker).min(axis=1, initial=INF)
+    shape = ks.majorant_shape
+    cell = np.minimum(np.maximum(tracker.cell, 0), shape - 1)
+    index = ks.majorant_offset + (cell[..., 0] * shape[:, 1] + cell[..., 1]) * shape[:, 2] + cell[..., 2]
+    majorant = ks.majorant_data[index] * ks.majorant_coeff
+    sigma = np.zeros(len(tracker))
+    for m in range(shape.shape[0]):
+        sigma = sigma + np.where(tracker.phase[:, m] == 1, majorant[:, m], 0.0)
+    return t_end, sigma
+
+
+def _tracker_advance(ks, tracker, moving, t_end):
+    """For the rays in mask `moving`, move every medium whose boundary is at `t_end` into its next block
+    (or out)."""
+    due = moving[:, None] & (_tracker_boundary(tracker) <= t_end[:, None])
+    entering = due & (tracker.phase == 0)
+    inside = due & (tracker.phase == 1)
+    leaving = inside & (tracker.t_exit <= t_end[:, None])
+    stepping = inside & ~leaving
+    if entering.any():
+        _tracker_enter(ks, tracker, *np.nonzero(entering))
+    tracker.phase[leaving] = 2
+    if stepping.any():
+        rays, media = np.nonzero(stepping)
+        axis = np.argmin(tracker.t_next[rays, media], axis=1)
+        tracker.cell[rays, media, axis] += tracker.step[rays, media, axis]
+        tracker.t_next[rays, media, axis] += tracker.t_delta[rays, media, axis]
+        cell = tracker.cell[rays, media, axis]
+        gone = (cell < 0) | (cell >= ks.majorant_shape[media, axis])
+        tracker.phase[rays[gone], media[gone]] = 2
+
+
+def _track(ks, paths, rows, origins, directions, t_max, collide):
+    """Tentative collisions along rays against the majorant (delta and ratio tracking share this).
+
+    Ray k belongs to path `rows[k]` and draws its free-flight distances from that path's stream.
+    `collide(rays, points, sigma_bar)` handles the rays (indices) that have a tentative collision and
+    returns which of them stop there; a ray also stops when it leaves every medium."""
+    flight = _tracker_start(ks, origins, directions, t_max)
+    flight.ray = np.arange(origins.shape[0])
+    flight.t = np.zeros(origins.shape[0])
+    while len(flight):
+        t_end, sigma_bar = _tracker_segment(ks, flight)
+        escaped = t_end == INF
+        drawing = ~escaped & (sigma_bar > 0.0)
+        step = np.zeros(len(flight))
+        step[drawing] = -np.log(1.0 - _draw(paths, rows[flight.ray[drawing]])) / sigma_bar[drawing]
+        crossing = ~escaped & (~drawing | (flight.t + step >= t_end))
+        colliding = drawing & ~crossing
+        flight.t = np.where(crossing, t_end, np.where(colliding, flight.t + step, flight.t))
+        _tracker_advance(ks, flight, crossing, t_end)
+        stop = escaped
+        hits = np.flatnonzero(colliding)
+        if hits.size:
+            rays = flight.ray[hits]
+            points = origins[rays] + flight.t[hits, None] * directions[rays]
+            stop[hits] = collide(rays, points, sigma_bar[hits])
+        flight = flight.take(~stop)
+
+
+# ----------------------------------------------------------------------------- phase functions
+
+def _phase_pdf(ks, m, lams, cos_theta):
+    if ks.phase_kind[m] == PHASE_RAYLEIGH:
+        return rayleigh_pdf(cos_theta)
+    return hg_pdf(_table(ks.anisotropy[m], lams), cos_theta)
+
+
+def _mixture_phase(ks, medium_s, lams, cos_theta):
+    """Phase pdf (= value) at each path wavelength: the σ_s-weighted mixture of the media's phases."""
+    total = np.zeros(lams.shape)
+    weighted = np.zeros(lams.shape)
+    for m in range(medium_s.shape[1]):
+        weight = medium_s[:, m]
+        scatters = weight > 0.0
+        total = total + np.where(scatters, weight, 0.0)
+        weighted = weighted + np.where(scatters, weight * _phase_pdf(ks, m, lams, cos_theta[:, None]), 0.0)
+    return np.where(total > 0.0, weighted / total, 0.0)
+
+
+def _pick_medium(weights, u):
+    """Medium index drawn ∝ weights (paths, media) with uniform numbers u."""
+    total = np.zeros(weights.shape[0])
+    for m in range(weights.shape[1]):
+        total = total + weights[:, m]
+    target = u * total
+    chosen = np.full(weights.shape[0], weights.shape[1] - 1)
+    open_ = np.ones(weights.shape[0], dtype=bool)
+    for m in range(weights.shape[1]):
+        target = target - weights[:, m]
+        hit = open_ & (target < 0.0)
+        chosen[hit] = m
+        open_ &= ~hit
+    return chosen
+
+
+# ----------------------------------------------------------------------------- lights
+
+def _sun_solid_angle(ks, light):
+    return 2.0 * np.pi * (1.0 - ks.light_cos[light])
+
+
+def _infinite_radiance(ks, light, lams, directions):
+    """Radiance of a non-delta infinite light seen along `directions` at `lams` (0 for other lights)."""
+    kind = ks.light_kind[light]
+    if kind == ENVIRONMENT:
+        return _table(ks.light_spd[light], lams)
+    if kind == SKY:
+        t = np.minimum(np.maximum(directions[:, 2], 0.0), 1.0)[:, None]
+        return t * _table(ks.light_spd[light], lams) + (1.0 - t) * _table(ks.light_spd_horizon[light], lams)
+    if kind == SUN and ks.light_cos[light] < 1.0:
+        seen = _dot(directions, ks.light_dir[light]) >= ks.light_cos[light]
+        sin2 = 1.0 - ks.light_cos[light] ** 2
+        return np.where(seen[:, None], _table(ks.light_spd[light], lams) / (np.pi * sin2), 0.0)
+    return np.zeros(lams.shape)
+
+
+def _infinite_pdf(ks, light, directions):
+    """Solid-angle pdf of `_sample_light` producing `directions` for a non-delta infinite light."""
+    kind = ks.light_kind[light]
+    if kind == ENVIRONMENT or kind == SKY:
+        return np.full(directions.shape[0], 1.0 / (4.0 * np.pi))
+    if kind == SUN and ks.light_cos[light] < 1.0:
+        seen = _dot(directions, ks.light_dir[light]) >= ks.light_cos[light]
+        return np.where(seen, 1.0 / _sun_solid_angle(ks, light), 0.0)
+    return np.zeros(directions.shape[0])
+
+
+def _sample_light(ks, light, points, u1, u2, lams):
+    """Directions to one light from `points`: (directions, solid-angle pdf (1 for delta lights),
+    distance, delta flag, incident radiance per wavelength (irradiance / intensity / d² for delta))."""
+    kind = ks.light_kind[light]
+    count = points.shape[0]
+    if kind == SUN and ks.light_cos[light] >= 1.0:
+        return (np.broadcast_to(ks.light_dir[light], (count, 3)), np.ones(count), np.full(count, INF),
+                True, _table(ks.light_spd[light], lams))
+    if kind == SUN:
+        cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
+        w = _direction_from_cos(np.broadcast_to(ks.light_dir[light], (count, 3)), cos_theta, u2)
+        pdf = np.full(count, 1.0 / _sun_solid_angle(ks, light))
+        return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, lams, w)
+    if kind == ENVIRONMENT or kind == SKY:
+        wz = 1.0 - 2.0 * u1
+        r = np.sqrt(np.maximum(0.0, 1.0 - wz * wz))
+        w = np.stack([r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2), wz], axis=1)
+        pdf = np.full(count, 1.0 / (4.0 * np.pi))
+        return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, lams, w)
+    v = ks.light_pos[light] - points
+    distance = np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
+    w = v / distance[:, None]
+    falloff = 1.0 / (distance * distance)
+    if kind == SPOT:
+        cos_angle = -_dot(w, ks.light_dir[light])
+        smooth = ks.light_smooth[light]
+        if smooth > 0.0:
+            t = np.minimum(np.maximum((cos_angle - ks.light_cos[light]) / smooth, 0.0), 1.0)
+            falloff = falloff * (t * t * (3.0 - 2.0 * t))
+        else:
+            falloff = np.where(cos_angle < ks.light_cos[light], 0.0, falloff)
+    return w, np.ones(count), distance, True, _table(ks.light_spd[light], lams) * falloff[:, None]
+
+
+def _sample_lights(ks, lights, points, u1, u2, lams):
+    """`_sample_light` for each path's own light (`lights`, one index per path)."""
+    count = points.shape[0]
+    out = _Batch(w=np.zeros((count, 3)), pdf=np.zeros(count), distance=np.zeros(count),
+                 delta=np.zeros(count, dtype=bool), radiance=np.zeros(lams.shape))
+    for light in range(ks.light_kind.shape[0]):
+        rows = np.flatnonzero(lights == light)
+        if rows.size:
+            out.w[rows], out.pdf[rows], out.distance[rows], out.delta[rows], out.radiance[rows] = _sample_light(
+                ks, light, points[rows], u1[rows], u2[rows], lams[rows])
+    return out
+
+
+def _choose_lights(ks, choice):
+    """Each path's light for next-event estimation, by walking the pmf with its uniform number."""
+    lights = np.zeros(choice.shape[0], dtype=np.int64)
+    for light in range(ks.light_kind.shape[0] - 1):
+        further = (lights == light) & (choice >= ks.light_pmf[light])
+        choice = np.where(further, choice - ks.light_pmf[light], choice)
+        lights[further] += 1
+    return lights
+
+
+# ----------------------------------------------------------------------------- transport
+
+def _camera_paths(ks, px, py, keys):
+    """New paths through pixels (px, py) (box filter): wavelengths (hero and stratified companions) and
+    camera rays. Returns the path batch and the camera wavelengths with their pdfs."""
+    count, n = keys.shape[0], ks.wavelengths_per_path
+    paths = _Batch(id=np.arange(count), key=keys, counter=np.zeros(count, dtype=np.uint64),
+                   lams=np.empty((count, n)), beta=np.ones((count, n)), r_u=np.ones((count, n)),
+                   r_l=np.ones((count, n)), o=np.zeros((count, 3)), d=np.zeros((count, 3)),
+                   depth=np.zeros(count, dtype=np.int64), scattered=np.zeros(count, dtype=bool))
+    u = _draw(paths)
+    lam_cam, pdf_cam = np.empty((count, n)), np.empty((count, n))
+    for i in range(n):
+        ui = u + i / n
+        ui -= np.floor(ui)
+        lam_cam[:, i] = sample_binned(ks.lambda_cdf, ui)
+        pdf_cam[:, i] = pdf_binned(ks.lambda_pdf, lam_cam[:, i])
+    paths.lams[:] = lam_cam
+    ex, ey = ks.cam_extent[0], ks.cam_extent[1]
+    cx = (-0.5 + (px + _draw(paths)) / ks.width) * ex + ks.cam_extent[2]
+    cy = (0.5 - (py + _draw(paths)) / ks.height) * ey + ks.cam_extent[3]
+    zeros = np.zeros(count)
+    if ks.cam_kind == PERSPECTIVE:
+        paths.o = _transform_point(ks.cam_to_world, np.stack([zeros, zeros, zeros], axis=1))
+        paths.d = _transform_vector(ks.cam_to_world, np.stack([cx, cy, zeros - 1.0], axis=1))
+    else:
+        paths.o = _transform_point(ks.cam_to_world, np.stack([cx, cy, zeros], axis=1))
+        paths.d = _transform_vector(ks.cam_to_world, np.stack([zeros, zeros, zeros - 1.0], axis=1))
+    paths.d = _normalize(paths.d)
+    return paths, lam_cam, pdf_cam
+
+
+def _free_flight(ks, paths, radiance):
+    """Delta tracking of every path to its next real event, collecting thermal emission at each
+    tentative collision and weighting null collisions (spectral MIS ratios included).
+
+    Returns each path's event and the vertex data of real events (position q, σ̄, the hero's σ_fl and
+    the per-medium σ_s, σ_fl at q)."""
+    count, n = paths.lams.shape
+    media = ks.density_scale.shape[0]
+    vertex = _Batch(event=np.full(count, EVENT_ESCAPE, dtype=np.int8), q=np.zeros((count, 3)),
+                    sigma_bar=np.zeros(count), sigma_fl0=np.zeros(count),
+                    medium_s=np.zeros((count, media, n)), medium_fl=np.zeros((count, media, n)))
+
+    def collide(rows, points, sigma_bar):
+        c = _coefficients(ks, points, paths.lams[rows])
+        beta, r_u, r_l = paths.beta[rows], paths.r_u[rows], paths.r_l[rows]
+        bar = sigma_bar[:, None]
+        mean_r_u = _mean(r_u)[:, None]
+        radiance[paths.id[rows]] += np.where(c.emission > 0.0, beta * c.emission / (bar * mean_r_u), 0.0)
+        total = sigma_bar + c.sigma_fl[:, 0]
+        sigma_n = np.maximum(0.0, bar - c.sigma_a - c.sigma_s)
+        choice = _draw(paths, rows) * total
+        absorbed = choice < c.sigma_a[:, 0]
+        scattered = ~absorbed & (choice < c.sigma_a[:, 0] + c.sigma_s[:, 0])
+        fluoresced = ~absorbed & ~scattered & (choice < c.sigma_a[:, 0] + c.sigma_s[:, 0] + c.sigma_fl[:, 0])
+        null = ~(absorbed | scattered | fluoresced)
+        p0 = np.where(scattered, c.sigma_s[:, 0], sigma_n[:, 0])[:, None] / total[:, None]
+        beta = np.where(scattered[:, None], beta * (c.sigma_s / bar / p0), beta)
+        r_u = np.where(scattered[:, None], r_u * (c.sigma_s / (bar + c.sigma_fl) / p0), r_u)
+        beta = np.where(null[:, None], beta * (sigma_n / bar / p0), beta)
+        r_u = np.where(null[:, None], r_u * (sigma_n / (bar + c.sigma_fl) / p0), r_u)
+        r_l = np.where(null[:, None], r_l / p0, r_l)
+        paths.beta[rows], paths.r_u[rows], paths.r_l[rows] = beta, r_u, r_l
+        dead = null & ~np.any(beta > 0.0, axis=1)
+        event = np.where(scattered, EVENT_SCATTER, np.where(fluoresced, EVENT_FLUORESCE, EVENT_ABSORB))
+        stop = ~null | dead
+        real = scattered | fluoresced
+        vertex.event[rows[stop]] = event[stop]
+        keep = rows[real]
+        vertex.q[keep], vertex.sigma_bar[keep], vertex.sigma_fl0[keep] = \
+            points[real], sigma_bar[real], c.sigma_fl[real, 0]
+        vertex.medium_s[keep], vertex.medium_fl[keep] = c.medium_s[real], c.medium_fl[real]
+        return stop
+
+    _track(ks, paths, np.arange(count), paths.o, paths.d, INF, collide)
+    return vertex
+
+
+def _escape(ks, paths, radiance):
+    """Radiance of the infinite lights seen by escaping paths: plain for camera rays, MIS-weighted
+    against light sampling after a scattering vertex."""
+    plain_mean = _mean(paths.r_u)
+    for light in range(ks.light_kind.shape[0]):
+        light_radiance = _infinite_radiance(ks, light, paths.lams, paths.d)
+        light_pdf = ks.light_pmf[light] * _infinite_pdf(ks, light, paths.d)
+        mean_r = np.where(paths.scattered, _mean(paths.r_u + paths.r_l * light_pdf[:, None]), plain_mean)
+        radiance[paths.id] += paths.beta * light_radiance / mean_r[:, None]
+
+
+def _fluoresce(ks, paths, vertex, rows):
+    """Backward fluorescence at the vertices `rows`: the hero's wavelength becomes an excitation
+    wavelength drawn ∝ excitation of the medium that fluoresced; the companions are dropped."""
+    medium = _pick_medium(vertex.medium_fl[rows, :, 0], _draw(paths, rows))
+    paths.beta[rows, 0] *= (vertex.sigma_bar[rows] + vertex.sigma_fl0[rows]) / vertex.sigma_bar[rows]
+    u = _draw(paths, rows)
+    for m in range(ks.density_scale.shape[0]):
+        chosen = medium == m
+        paths.lams[rows[chosen], 0] = sample_binned(ks.excitation_cdf[m], u[chosen])
+    paths.beta[rows, 1:] = 0.0
+    paths.r_u[rows, 1:] = 0.0
+    paths.r_l[rows, 1:] = 0.0
+
+
+def _transmittance(ks, paths, rows, origins, directions, t_max, lams):
+    """Ratio tracking along shadow rays (ray k from path rows[k]): the transmittance per wavelength and
+    the product of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) (for MIS)."""
+    transmittance = np.ones(lams.shape)
+    null_ratio = np.ones(lams.shape)
+
+    def collide(rays, points, sigma_bar):
+        c = _coefficients(ks, points, lams[rays])
+        bar = sigma_bar[:, None]
+        sigma_n = np.maximum(0.0, bar - c.sigma_a - c.sigma_s)
+        transmittance[rays] *= sigma_n / bar
+        null_ratio[rays] *= sigma_n / (bar + c.sigma_fl)
+        return ~np.any(transmittance[rays] > 0.0, axis=1)
+
+    _track(ks, paths, rows, origins, directions, t_max, collide)
+    return transmittance, null_ratio
+
+
+def _next_event(ks, paths, vertex, isotropic, radiance):
+    """Next-event estimation from every vertex: one light chosen by its pmf, ratio-tracked
+    transmittance, MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
+    choice, u1, u2 = _draw(paths), _draw(paths), _draw(paths)
+    lights = _choose_lights(ks, choice)
+    sample = _sample_lights(ks, lights, paths.o, u1, u2, paths.lams)
+    cos_theta = (paths.d[:, 0] * sample.w[:, 0] + paths.d[:, 1] * sample.w[:, 1]
+                 + paths.d[:, 2] * sample.w[:, 2])
+    phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
+                            _mixture_phase(ks, vertex.medium_s, paths.lams, cos_theta))
+    lit = np.any((sample.radiance > 0.0) & (phase_values > 0.0) & (paths.beta > 0.0), axis=1)
+    rows = np.flatnonzero(lit)
+    if rows.size == 0:
+        return
+    transmittance, null_ratio = _transmittance(ks, paths, rows, paths.o[rows], sample.w[rows],
+                                               sample.distance[rows], paths.lams[rows])
+    r_u, phase_values = paths.r_u[rows], phase_values[rows]
+    light_pdf = (ks.light_pmf[lights[rows]] * sample.pdf[rows])[:, None]
+    r_u_light = np.where(sample.delta[rows, None], 0.0, r_u * phase_values * null_ratio)
+    mean_r = _mean(r_u * light_pdf + r_u_light)
+    counted = mean_r > 0.0
+    contribution = paths.beta[rows] * phase_values * transmittance * sample.radiance[rows] / mean_r[:, None]
+    radiance[paths.id[rows[counted]]] += contribution[counted]
+
+
+def _sample_phase(ks, paths, vertex, isotropic):
+    """Phase sampling of the next direction (the hero's phase; MIS pdfs at every wavelength).
+    Returns which paths continue (those whose hero pdf is positive)."""
+    u1, u2 = _draw(paths), _draw(paths)
+    new_cos = 1.0 - 2.0 * u1
+    anisotropic = np.flatnonzero(~isotropic)
+    medium = _pick_medium(vertex.medium_s[anisotropic, :, 0], _draw(paths, anisotropic))
+    for m in range(ks.density_scale.shape[0]):
+        rows = anisotropic[medium == m]
+        if ks.phase_kind[m] == PHASE_RAYLEIGH:
+            new_cos[rows] = rayleigh_sample_cos(u1[rows])
+        else:
+            new_cos[rows] = hg_sample_cos(_table(ks.anisotropy[m], paths.lams[rows, 0]), u1[rows])
+    direction = _direction_from_cos(paths.d, new_cos, u2)
+    phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
+                            _mixture_phase(ks, vertex.medium_s, paths.lams, new_cos))
+    pdf0 = phase_values[:, :1]
+    paths.r_l = paths.r_u / pdf0
+    paths.beta = paths.beta * (phase_values / pdf0)
+    paths.r_u = paths.r_u * (phase_values / pdf0)
+    paths.d = _normalize(direction)
+    paths.scattered[:] = True
+    return pdf0[:, 0] > 0.0
+
+
+def _roulette(ks, paths):
+    """Russian roulette on the MIS-weighted throughput once paths reach `rr_depth`; returns survivors."""
+    largest = np.max(paths.beta / _mean(paths.r_u)[:, None], axis=1, initial=0.0)
+    playing = np.flatnonzero((paths.depth >= ks.rr_depth) & (largest < 1.0))
+    survive = np.maximum(largest[playing], 0.05)
+    lost = _draw(paths, playing) >= survive
+    paths.beta[playing] /= survive[:, None]
+    keep = np.ones(len(paths), dtype=bool)
+    keep[playing[lost]] = False
+    return keep
+
+
+def _bounce(ks, paths, radiance):
+    """Every live path to its next scattering vertex and past it; returns the paths still alive."""
+    vertex = _free_flight(ks, paths, radiance)
+    escaped = vertex.event == EVENT_ESCAPE
+    if escaped.any():
+        _escape(ks, paths.take(escaped), radiance)
+    real = (vertex.event == EVENT_SCATTER) | (vertex.event == EVENT_FLUORESCE)
+    real &= paths.depth + 1 <= ks.max_depth
+    paths, vertex = paths.take(real), vertex.take(real)
+    paths.depth += 1
+    paths.o = vertex.q
+    isotropic = vertex.event == EVENT_FLUORESCE
+    if isotropic.any():
+        _fluoresce(ks, paths, vertex, np.flatnonzero(isotropic))
+    if ks.light_kind.shape[0] > 0:
+        _next_event(ks, paths, vertex, isotropic, radiance)
+    keep = _sample_phase(ks, paths, vertex, isotropic)
+    paths = paths.take(keep)
+    return paths.take(_roulette(ks, paths))
+
+
+def _trace(ks, px, py, keys):
+    """XYZ estimates (paths, 3) of one camera path per key, through pixels (px, py)."""
+    paths, lam_cam, pdf_cam = _camera_paths(ks, px, py, keys)
+    radiance = np.zeros(lam_cam.shape)
+    while len(paths):
+        paths = _bounce(ks, paths, radiance)
+    n = lam_cam.shape[1]
+    xyz = np.zeros((keys.shape[0], 3))
+    for i in range(n):
+        counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
+        scale = radiance[:, i] / (pdf_cam[:, i] * n)
+        for c in range(3):
+            xyz[:, c] += np.where(counted, scale * _table(ks.xyz_weights[c], lam_cam[:, i]), 0.0)
+    return xyz
+
+
+def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+    """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
+    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
+    samples = sample_end - sample_begin
+    total = tile_width * tile_height * samples
+    for start in range(0, total, CHUNK_PATHS):
+        index = np.arange(start, min(start + CHUNK_PATHS, total))
+        pixel, sample = np.divmod(index, samples)
+        row, column = np.divmod(pixel, tile_width)
+        px, py = x0 + column, y0 + row
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            keys = path_key(seed, band, py * ks.width + px, sample_begin + sample)
+            xyz = _trace(ks, px, py, keys)
+        np.add.at(sum_xyz, (row, column), xyz)
+        np.add.at(sum_sq, (row, column), xyz * xyz)
+
+
+def set_threads(count: int) -> None:
+    """Does nothing: this backend runs in the calling thread (NumPy's element-wise operations are
+    single-threaded); run tiles in several processes, e.g. Dask workers, to use more cores."""
