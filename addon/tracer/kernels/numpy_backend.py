@@ -23,7 +23,7 @@ from ..compile import CAMERA_KINDS, LIGHT_KINDS, PHASE_KINDS
 from ..phase import hg_pdf, hg_sample_cos, orthonormal_basis, rayleigh_pdf, rayleigh_sample_cos
 from ..planck import planck_radiance
 from ..sampling import pdf_binned, sample_binned
-from ..wavelengths import LAMBDA_MIN
+from ..wavelengths import GRID, LAMBDA_MIN
 from .rng import path_key, uniform
 
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
@@ -57,24 +57,26 @@ def _draw(paths, rows=slice(None)):
 
 # ----------------------------------------------------------------------------- small helpers
 
-def _table(row, lam):
-    """Linear interpolation of a per-nanometre table at wavelengths `lam` (0 outside the grid)."""
+def _at(lam):
+    """Where wavelengths `lam` fall on the grid, for `_table`: (bin index, weights of its two ends, inside)."""
     position = lam - LAMBDA_MIN
-    inside = (position >= 0.0) & (position <= row.shape[0] - 1)
-    index = np.minimum(np.where(inside, position, 0.0).astype(np.int64), row.shape[0] - 2)
+    inside = (position >= 0.0) & (position <= GRID.size - 1)
+    index = np.minimum(np.where(inside, position, 0.0).astype(np.int64), GRID.size - 2)
     frac = position - index
-    return np.where(inside, row[index] * (1.0 - frac) + row[index + 1] * frac, 0.0)
+    return index, 1.0 - frac, frac, inside
 
 
-def _table_rows(table, rows, lam):
-    """`_table(table[rows[k]], lam[k])` for each path k (lam of shape (paths, n))."""
-    position = lam - LAMBDA_MIN
-    size = table.shape[-1]
-    inside = (position >= 0.0) & (position <= size - 1)
-    index = np.minimum(np.where(inside, position, 0.0).astype(np.int64), size - 2)
-    frac = position - index
+def _table(row, at):
+    """Linear interpolation of a per-nanometre table at the wavelengths located by `_at` (0 off the grid)."""
+    index, w0, w1, inside = at
+    return np.where(inside, row[index] * w0 + row[index + 1] * w1, 0.0)
+
+
+def _table_rows(table, rows, at):
+    """`_table(table[rows[k]], at)` for each path k (wavelengths of shape (paths, n))."""
+    index, w0, w1, inside = at
     rows = rows[:, None]
-    return np.where(inside, table[rows, index] * (1.0 - frac) + table[rows, index + 1] * frac, 0.0)
+    return np.where(inside, table[rows, index] * w0 + table[rows, index + 1] * w1, 0.0)
 
 
 def _transform_point(m, p):
@@ -117,20 +119,30 @@ def _mean(values):
 # ----------------------------------------------------------------------------- volume look-ups
 
 def _trilinear(data, offset, shape, points):
-    """Trilinear interpolation of cell-centre samples at index-space points (rows), zero outside."""
+    """Trilinear interpolation of cell-centre samples at index-space points (rows), zero outside.
+
+    Per axis and corner bit: the cell's flat-index term (clipped into the grid) and its weight, zero for
+    cells outside, so that outside corners add exactly nothing, as the Numba kernel skips them."""
     floor = np.floor(points)
     base = floor.astype(np.int64)
     frac = points - floor
+    strides = (shape[1] * shape[2], shape[2], 1)
+    terms, weights = [], []
+    for axis in range(3):
+        per_bit_terms, per_bit_weights = [], []
+        for bit, weight in ((0, 1.0 - frac[:, axis]), (1, frac[:, axis])):
+            cell = base[:, axis] + bit
+            inside = (cell >= 0) & (cell < shape[axis])
+            per_bit_terms.append(np.where(inside, cell, 0) * strides[axis])
+            per_bit_weights.append(np.where(inside, weight, 0.0))
+        terms.append(per_bit_terms)
+        weights.append(per_bit_weights)
     total = np.zeros(points.shape[0])
-    for corner in range(8):
-        bits = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1)
-        cell = [base[:, axis] + bits[axis] for axis in range(3)]
-        valid = np.ones(points.shape[0], dtype=bool)
-        for axis in range(3):
-            valid &= (cell[axis] >= 0) & (cell[axis] < shape[axis])
-        weight = [frac[:, axis] if bits[axis] else 1.0 - frac[:, axis] for axis in range(3)]
-        index = np.where(valid, offset + (cell[0] * shape[1] + cell[1]) * shape[2] + cell[2], offset)
-        total += np.where(valid, weight[0] * weight[1] * weight[2] * data[index], 0.0)
+    for bz in (0, 1):  # corners in the Numba kernel's order (x fastest), so the sums round alike
+        for by in (0, 1):
+            for bx in (0, 1):
+                index = offset + terms[0][bx] + terms[1][by] + terms[2][bz]
+                total = total + weights[0][bx] * weights[1][by] * weights[2][bz] * data[index]
     return total
 
 
@@ -145,19 +157,19 @@ def _temperature(ks, m, points):
     return raw * ks.temperature_map[m, 0] + ks.temperature_map[m, 1]
 
 
-def _albedo(ks, m, density, lams):
+def _albedo(ks, m, density, at):
     """Single-scattering albedo at raw densities (rows) and wavelengths (columns): the density levels'
     tables interpolated linearly, clamped outside the levels."""
     count = ks.albedo_count[m]
     levels = ks.albedo_densities[m, :count]
     table = ks.albedo_table[m]
-    lowest = _table(table[0], lams)
+    lowest = _table(table[0], at)
     if count == 1:
         return lowest
     upper = np.clip(np.searchsorted(levels, density, side="left"), 1, count - 1)
     t = ((density - levels[upper - 1]) / (levels[upper] - levels[upper - 1]))[:, None]
-    between = (1.0 - t) * _table_rows(table, upper - 1, lams) + t * _table_rows(table, upper, lams)
-    highest = _table(table[count - 1], lams)
+    between = (1.0 - t) * _table_rows(table, upper - 1, at) + t * _table_rows(table, upper, at)
+    highest = _table(table[count - 1], at)
     return np.where((density <= levels[0])[:, None], lowest,
                     np.where((density >= levels[count - 1])[:, None], highest, between))
 
@@ -176,14 +188,15 @@ def _coefficients(ks, points, lams):
         if rows.size == 0:
             continue
         lam, r = lams[rows], rho[rows, None]
-        sigma_t = r * _table(ks.extinction[m], lam)
-        scattering = sigma_t * _albedo(ks, m, rho[rows] / ks.density_scale[m], lam)
+        at = _at(lam)
+        sigma_t = r * _table(ks.extinction[m], at)
+        scattering = sigma_t * _albedo(ks, m, rho[rows] / ks.density_scale[m], at)
         plain_absorption = sigma_t - scattering
-        fluorescence = r * ks.fluor_strength[m] * _table(ks.emission_pdf[m], lam)
+        fluorescence = r * ks.fluor_strength[m] * _table(ks.emission_pdf[m], at)
         out.medium_s[rows, m] = scattering
         out.medium_fl[rows, m] = fluorescence
         out.sigma_s[rows] += scattering
-        out.sigma_a[rows] += plain_absorption + r * _table(ks.excitation[m], lam)
+        out.sigma_a[rows] += plain_absorption + r * _table(ks.excitation[m], at)
         out.sigma_fl[rows] += fluorescence
         if ks.temperature_offset[m] >= 0:
             temperature = _temperature(ks, m, points[rows])[:, None]
@@ -306,26 +319,28 @@ def _track(ks, paths, rows, origins, directions, t_max, collide):
             rays = flight.ray[hits]
             points = origins[rays] + flight.t[hits, None] * directions[rays]
             stop[hits] = collide(rays, points, sigma_bar[hits])
-        flight = flight.take(~stop)
+        if stop.any():
+            flight = flight.take(~stop)
 
 
 # ----------------------------------------------------------------------------- phase functions
 
-def _phase_pdf(ks, m, lams, cos_theta):
+def _phase_pdf(ks, m, at, cos_theta):
     if ks.phase_kind[m] == PHASE_RAYLEIGH:
         return rayleigh_pdf(cos_theta)
-    return hg_pdf(_table(ks.anisotropy[m], lams), cos_theta)
+    return hg_pdf(_table(ks.anisotropy[m], at), cos_theta)
 
 
 def _mixture_phase(ks, medium_s, lams, cos_theta):
     """Phase pdf (= value) at each path wavelength: the σ_s-weighted mixture of the media's phases."""
     total = np.zeros(lams.shape)
     weighted = np.zeros(lams.shape)
+    at = _at(lams)
     for m in range(medium_s.shape[1]):
         weight = medium_s[:, m]
         scatters = weight > 0.0
         total = total + np.where(scatters, weight, 0.0)
-        weighted = weighted + np.where(scatters, weight * _phase_pdf(ks, m, lams, cos_theta[:, None]), 0.0)
+        weighted = weighted + np.where(scatters, weight * _phase_pdf(ks, m, at, cos_theta[:, None]), 0.0)
     return np.where(total > 0.0, weighted / total, 0.0)
 
 
@@ -351,19 +366,20 @@ def _sun_solid_angle(ks, light):
     return 2.0 * np.pi * (1.0 - ks.light_cos[light])
 
 
-def _infinite_radiance(ks, light, lams, directions):
-    """Radiance of a non-delta infinite light seen along `directions` at `lams` (0 for other lights)."""
+def _infinite_radiance(ks, light, at, directions):
+    """Radiance of a non-delta infinite light seen along `directions`, at the wavelengths located by
+    `at` (0 for other lights)."""
     kind = ks.light_kind[light]
     if kind == ENVIRONMENT:
-        return _table(ks.light_spd[light], lams)
+        return _table(ks.light_spd[light], at)
     if kind == SKY:
         t = np.minimum(np.maximum(directions[:, 2], 0.0), 1.0)[:, None]
-        return t * _table(ks.light_spd[light], lams) + (1.0 - t) * _table(ks.light_spd_horizon[light], lams)
+        return t * _table(ks.light_spd[light], at) + (1.0 - t) * _table(ks.light_spd_horizon[light], at)
     if kind == SUN and ks.light_cos[light] < 1.0:
         seen = _dot(directions, ks.light_dir[light]) >= ks.light_cos[light]
         sin2 = 1.0 - ks.light_cos[light] ** 2
-        return np.where(seen[:, None], _table(ks.light_spd[light], lams) / (np.pi * sin2), 0.0)
-    return np.zeros(lams.shape)
+        return np.where(seen[:, None], _table(ks.light_spd[light], at) / (np.pi * sin2), 0.0)
+    return np.zeros(at[0].shape)
 
 
 def _infinite_pdf(ks, light, directions):
@@ -382,20 +398,21 @@ def _sample_light(ks, light, points, u1, u2, lams):
     distance, delta flag, incident radiance per wavelength (irradiance / intensity / d² for delta))."""
     kind = ks.light_kind[light]
     count = points.shape[0]
+    at = _at(lams)
     if kind == SUN and ks.light_cos[light] >= 1.0:
         return (np.broadcast_to(ks.light_dir[light], (count, 3)), np.ones(count), np.full(count, INF),
-                True, _table(ks.light_spd[light], lams))
+                True, _table(ks.light_spd[light], at))
     if kind == SUN:
         cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
         w = _direction_from_cos(np.broadcast_to(ks.light_dir[light], (count, 3)), cos_theta, u2)
         pdf = np.full(count, 1.0 / _sun_solid_angle(ks, light))
-        return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, lams, w)
+        return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, at, w)
     if kind == ENVIRONMENT or kind == SKY:
         wz = 1.0 - 2.0 * u1
         r = np.sqrt(np.maximum(0.0, 1.0 - wz * wz))
         w = np.stack([r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2), wz], axis=1)
         pdf = np.full(count, 1.0 / (4.0 * np.pi))
-        return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, lams, w)
+        return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, at, w)
     v = ks.light_pos[light] - points
     distance = np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
     w = v / distance[:, None]
@@ -408,7 +425,7 @@ def _sample_light(ks, light, points, u1, u2, lams):
             falloff = falloff * (t * t * (3.0 - 2.0 * t))
         else:
             falloff = np.where(cos_angle < ks.light_cos[light], 0.0, falloff)
-    return w, np.ones(count), distance, True, _table(ks.light_spd[light], lams) * falloff[:, None]
+    return w, np.ones(count), distance, True, _table(ks.light_spd[light], at) * falloff[:, None]
 
 
 def _sample_lights(ks, lights, points, u1, u2, lams):
@@ -517,8 +534,9 @@ def _escape(ks, paths, radiance):
     """Radiance of the infinite lights seen by escaping paths: plain for camera rays, MIS-weighted
     against light sampling after a scattering vertex."""
     plain_mean = _mean(paths.r_u)
+    at = _at(paths.lams)
     for light in range(ks.light_kind.shape[0]):
-        light_radiance = _infinite_radiance(ks, light, paths.lams, paths.d)
+        light_radiance = _infinite_radiance(ks, light, at, paths.d)
         light_pdf = ks.light_pmf[light] * _infinite_pdf(ks, light, paths.d)
         mean_r = np.where(paths.scattered, _mean(paths.r_u + paths.r_l * light_pdf[:, None]), plain_mean)
         radiance[paths.id] += paths.beta * light_radiance / mean_r[:, None]
@@ -593,7 +611,7 @@ def _sample_phase(ks, paths, vertex, isotropic):
         if ks.phase_kind[m] == PHASE_RAYLEIGH:
             new_cos[rows] = rayleigh_sample_cos(u1[rows])
         else:
-            new_cos[rows] = hg_sample_cos(_table(ks.anisotropy[m], paths.lams[rows, 0]), u1[rows])
+            new_cos[rows] = hg_sample_cos(_table(ks.anisotropy[m], _at(paths.lams[rows, 0])), u1[rows])
     direction = _direction_from_cos(paths.d, new_cos, u2)
     phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
                             _mixture_phase(ks, vertex.medium_s, paths.lams, new_cos))
@@ -650,8 +668,9 @@ def _trace(ks, px, py, keys):
     for i in range(n):
         counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
         scale = radiance[:, i] / (pdf_cam[:, i] * n)
+        at = _at(lam_cam[:, i])
         for c in range(3):
-            xyz[:, c] += np.where(counted, scale * _table(ks.xyz_weights[c], lam_cam[:, i]), 0.0)
+            xyz[:, c] += np.where(counted, scale * _table(ks.xyz_weights[c], at), 0.0)
     return xyz
 
 
