@@ -1,0 +1,274 @@
+"""The NumPy backend against the Numba kernel, and the NumPy backend on its own (no Numba, determinism).
+
+The two backends implement one algorithm, so on every scene below their images must estimate the same
+values. Statistical comparisons use independent renders (different seeds) and bounds stated at each
+test; with the same seed the backends trace the same paths (same random streams, same draw order), so
+their images agree pixel by pixel, which is a far stronger check than any statistical bound.
+
+Images are tiny (8×8 pixels) and each film is rendered in one unit per band, so that the NumPy backend
+traces all of a film's paths as one wavefront.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from addon.tracer import colorimetry, spectra
+from addon.tracer.compile import compile_scene
+from addon.tracer.film import Film
+from addon.tracer.kernels import numpy_backend
+from addon.tracer.render import band_scenes, render, render_unit
+from addon.tracer.scene import BlackbodyEmission, Fluorescence, Grid, Light, Medium
+from addon.tracer.wavelengths import GRID
+from tests.support import scenes as s
+
+REPO = Path(__file__).resolve().parents[2]
+SPP = 128
+SIGMAS = 4.0
+
+
+# ----------------------------------------------------------------------------- scenes
+
+def blob_grid(cells=16, size=2.0, blobs=4, seed=1) -> Grid:
+    """A cube of `cells`³ cells spanning `size` around the origin, holding a few Gaussian blobs (peak 1):
+    strongly heterogeneous, so the majorant grid's blocks differ."""
+    rng = np.random.default_rng(seed)
+    x = ((np.arange(cells) + 0.5) / cells - 0.5) * size
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    values = np.zeros((cells,) * 3)
+    for _ in range(blobs):
+        centre = rng.uniform(-0.3, 0.3, 3) * size
+        radius = rng.uniform(0.1, 0.25) * size
+        values += np.exp(-((X - centre[0]) ** 2 + (Y - centre[1]) ** 2 + (Z - centre[2]) ** 2) / (2 * radius**2))
+    index_to_world = s.box_grid(cells=(cells,) * 3, size=(size,) * 3).index_to_world
+    return Grid((values / values.max()).astype(np.float32), index_to_world)
+
+
+def grey_furnace():
+    return s.scene(s.perspective_camera(8, 8), [s.medium(s.box_grid(), extinction=2.0)], [s.environment()])
+
+
+def chromatic():
+    """Chromatic extinction, albedo and anisotropy: the spectral MIS over 4 wavelengths at work."""
+    medium = s.medium(s.box_grid(), extinction=s.smooth_spectrum(4.0, 0.4), albedo=s.smooth_spectrum(0.95, 0.6),
+                      g=s.smooth_spectrum(-0.3, 0.8))
+    return s.scene(s.perspective_camera(8, 8), [medium], [s.environment(0.5), s.sun([1, 0.5, 1], 2.0)])
+
+
+def heterogeneous():
+    """Gaussian blobs with a density-dependent albedo, a finite sun and an environment, in two bands."""
+    albedo = np.stack([spectra.constant(value).values for value in (0.99, 0.9, 0.7)])
+    medium = Medium(name="blobs", density=blob_grid(), density_scale=8.0, extinction=spectra.constant(1.0),
+                    albedo_densities=np.array([0.0, 0.5, 1.0]), albedo_table=albedo,
+                    anisotropy=spectra.constant(0.5))
+    lights = [s.sun([0.3, 0.4, 1.0], 3.0, angle=0.3), s.environment(0.3)]
+    return s.scene(s.ortho_camera(8, 8, scale=2.4), [medium], lights, bands=2)
+
+
+def fluorescence():
+    """A scattering slab with a UV-excited fluorophore under a UV environment and a weak visible sun."""
+    slab = s.box_grid(cells=(16, 16, 4), size=(6.0, 6.0, 0.4))
+    fluorophore = Fluorescence(spectra.window(spectra.constant(3.0), 300, 340), spectra.gaussian(550, 20), 0.8)
+    medium = s.medium(slab, extinction=0.5, albedo=0.9, g=0.2, fluorescence=fluorophore)
+    uv = Light(kind="environment", spectrum=spectra.window(spectra.constant(1.0), 280, 350), strength=1.0)
+    return s.scene(s.ortho_camera(8, 8, scale=2.0), [medium], [uv, s.sun([0, 0.3, 1], 0.3)])
+
+
+def blackbody():
+    """A hot, scattering medium with a varying temperature (1500–2500 K) and no lights (so no next-event
+    estimation)."""
+    hot = BlackbodyEmission(temperature=blob_grid(seed=2), temperature_scale=1000.0, temperature_offset=1500.0)
+    medium = s.medium(s.box_grid(), extinction=1.5, albedo=0.4, emission=hot)
+    return s.scene(s.perspective_camera(8, 8), [medium], [])
+
+
+def rayleigh():
+    """Rayleigh phase under a sky, one wavelength per path drawn uniformly."""
+    sky = Light(kind="sky", spectrum=s.smooth_spectrum(2.0, 0.3), strength=1.0,
+                horizon_spectrum=s.smooth_spectrum(0.6, 1.0))
+    medium = s.medium(s.box_grid(), extinction=1.5, albedo=0.95, phase="rayleigh")
+    return s.scene(s.perspective_camera(8, 8), [medium], [sky], wavelengths_per_path=1,
+                   wavelength_sampling="uniform")
+
+
+def two_media():
+    """A chromatic Henyey–Greenstein box overlapping a Rayleigh blob grid of another resolution."""
+    box = s.medium(s.box_grid(), extinction=s.smooth_spectrum(2.0, 1.0), albedo=0.9, g=0.6, name="box")
+    blobs = s.medium(blob_grid(cells=12, size=1.6, seed=3), scale=3.0, albedo=0.8, phase="rayleigh", name="blobs")
+    return s.scene(s.perspective_camera(8, 8), [box, blobs], [s.environment(0.5), s.sun([-1, 0.2, 1])])
+
+
+def point_and_spot():
+    """A point and a spot light outside the medium (inside it, the 1/d² of next-event estimation gives an
+    estimator of infinite variance, and image means no statistical bound can hold)."""
+    medium = s.medium(s.box_grid(), extinction=0.8, albedo=0.9, g=0.3)
+    point = Light(kind="point", spectrum=spectra.constant(1.0), strength=10.0, position=np.array([0.0, -1.8, 1.6]))
+    spot = Light(kind="spot", spectrum=s.smooth_spectrum(0.2, 1.0), strength=20.0, position=np.array([2.0, 0.0, 2.0]),
+                 spot_direction=np.array([-1.0, 0.0, -1.0]), spot_size=np.radians(40), spot_blend=0.3)
+    return s.scene(s.perspective_camera(8, 8), [medium], [point, spot])
+
+
+SCENES = {build.__name__: build for build in (grey_furnace, chromatic, heterogeneous, fluorescence, blackbody,
+                                              rayleigh, two_media, point_and_spot)}
+
+
+def render_film(scene, backend, seed, spp=SPP) -> Film:
+    """All samples of every band in one `render_unit` call each (one wavefront for the NumPy backend)."""
+    camera = scene.camera
+    bands = band_scenes(scene)
+    film = Film(camera.width, camera.height, len(bands))
+    for band, kernel_scene in enumerate(bands):
+        sums = render_unit(kernel_scene, band, (0, spp), (0, 0, camera.width, camera.height), seed, backend)
+        film.add(band, 0, 0, *sums)
+        film.count(band, spp)
+    return film
+
+
+@pytest.fixture(scope="module")
+def films():
+    """name -> {(backend, seed): film}, rendered once: Numba with seeds 1 and 2, NumPy with seed 2."""
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            scene = SCENES[name]()
+            cache[name] = {(backend, seed): render_film(scene, backend, seed)
+                           for backend, seed in (("numba", 1), ("numba", 2), ("numpy", 2))}
+        return cache[name]
+
+    return get
+
+
+def image_mean_and_error(film, channel):
+    """Mean of one XYZ channel over the image and the standard error of that mean."""
+    values = film.xyz[..., channel]
+    return values.mean(), np.sqrt(film.variance[..., channel].sum()) / values.size
+
+
+# ----------------------------------------------------------------------------- agreement
+
+@pytest.mark.parametrize("name", SCENES)
+def test_image_means_agree(films, name):
+    """Independent renders (Numba seed 1, NumPy seed 2) estimate the same image mean per channel:
+    |Δ| ≤ 4·sqrt(se₁² + se₂²), the standard errors from each film's own per-pixel variance. For
+    unbiased, roughly normal estimates a correct pair fails with probability ~6e-5 per channel."""
+    numba_film, numpy_film = films(name)["numba", 1], films(name)["numpy", 2]
+    for channel in range(3):
+        mean_a, error_a = image_mean_and_error(numba_film, channel)
+        mean_b, error_b = image_mean_and_error(numpy_film, channel)
+        bound = SIGMAS * np.hypot(error_a, error_b)
+        assert error_a > 0 and error_b > 0
+        assert abs(mean_a - mean_b) <= bound, f"channel {channel}: {mean_a:.5f} ± {error_a:.5f} (numba) vs " \
+                                              f"{mean_b:.5f} ± {error_b:.5f} (numpy)"
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_pixels_agree(films, name):
+    """Per-pixel z-scores of independent renders, z = Δ / sqrt(var₁ + var₂): fewer than 1% of the pixel
+    values beyond |z| > 4 (about 0.006% expected for normal estimates; the margin absorbs the heavy
+    tails of 128-sample variance estimates). Pixels whose values are certain (variance 0 in both)
+    must be equal."""
+    numba_film, numpy_film = films(name)["numba", 1], films(name)["numpy", 2]
+    difference = numba_film.xyz - numpy_film.xyz
+    variance = numba_film.variance + numpy_film.variance
+    certain = variance == 0
+    np.testing.assert_allclose(difference[certain], 0.0, atol=1e-12)
+    z = np.abs(difference[~certain]) / np.sqrt(variance[~certain])
+    assert np.mean(z > SIGMAS) < 0.01, f"{np.sum(z > SIGMAS)} of {z.size} pixel values with |z| > 4"
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_same_seed_traces_the_same_paths(films, name):
+    """With the same seed both backends draw the same numbers in the same order for every path, so the
+    images agree pixel by pixel, up to floating-point differences: NumPy's log/exp/sin/cos may differ
+    from the ones Numba calls in the last bit on some CPUs, which rarely sends a path down another
+    branch. (On the machine this was written on, every pixel agreed bit for bit.)"""
+    numba_film, numpy_film = films(name)["numba", 2], films(name)["numpy", 2]
+    close = np.isclose(numpy_film.sum_xyz, numba_film.sum_xyz, rtol=1e-9, atol=1e-12)
+    assert np.mean(close) >= 0.95, f"only {np.mean(close):.1%} of pixel values agree"
+
+
+def test_grey_furnace_returns_the_environment(films):
+    """Albedo 1 in a uniform environment: each backend's image is the environment's XYZ (within 4 σ)."""
+    expected = colorimetry.spectrum_to_xyz(np.ones(GRID.size))
+    for key in (("numba", 1), ("numpy", 2)):
+        for channel in range(3):
+            mean, error = image_mean_and_error(films("grey_furnace")[key], channel)
+            assert abs(mean - expected[channel]) <= SIGMAS * error, f"{key}: {mean:.5f} vs {expected[channel]:.5f}"
+
+
+# ----------------------------------------------------------------------------- the NumPy backend alone
+
+NO_NUMBA = """
+import importlib.abc, json, sys
+
+class NoNumba(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name == "numba" or name.startswith("numba."):
+            raise ImportError(f"{name} is blocked for this test")
+
+sys.meta_path.insert(0, NoNumba())
+from addon.tracer.render import render
+from tests.support.scenes import box_grid, environment, medium, perspective_camera, scene
+
+tiny = scene(perspective_camera(4, 3), [medium(box_grid(), albedo=0.8, g=0.3)], [environment()], spp=3, seed=7)
+result = render(tiny, backend="numpy", threads=2)
+try:
+    import addon.tracer.kernels.numba_backend
+    blocked = False
+except ImportError:
+    blocked = True
+print(json.dumps({"sum_xyz": result.film.sum_xyz.tolist(), "numba_loaded": "numba" in sys.modules,
+                  "blocked": blocked}))
+"""
+
+
+def test_numpy_backend_runs_without_numba():
+    """In a process where `import numba` fails, the NumPy backend renders, and gives the same image as
+    here (where the shared math is compiled by Numba for the other backend, but called plainly here)."""
+    done = subprocess.run([sys.executable, "-c", NO_NUMBA], cwd=REPO, capture_output=True, text=True, timeout=300,
+                          env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    assert report["blocked"] and not report["numba_loaded"]
+    tiny = s.scene(s.perspective_camera(4, 3), [s.medium(s.box_grid(), albedo=0.8, g=0.3)], [s.environment()],
+                   spp=3, seed=7)
+    here = render(tiny, backend="numpy").film.sum_xyz
+    np.testing.assert_allclose(report["sum_xyz"], here, rtol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def kernel_scene():
+    return compile_scene(heterogeneous())
+
+
+def test_same_seed_gives_the_same_image(kernel_scene):
+    first = render_unit(kernel_scene, 0, (0, 4), (0, 0, 8, 8), 3, "numpy")
+    second = render_unit(kernel_scene, 0, (0, 4), (0, 0, 8, 8), 3, "numpy")
+    np.testing.assert_array_equal(first[0], second[0])
+    np.testing.assert_array_equal(first[1], second[1])
+    assert np.any(first[0] != render_unit(kernel_scene, 0, (0, 4), (0, 0, 8, 8), 4, "numpy")[0])
+
+
+def test_split_samples_and_tiles_sum_to_the_whole(kernel_scene):
+    """Each path's numbers depend only on (seed, band, pixel, sample): any split of the work adds up."""
+    whole = render_unit(kernel_scene, 0, (0, 6), (0, 0, 8, 8), 3, "numpy")
+    first = render_unit(kernel_scene, 0, (0, 2), (0, 0, 8, 8), 3, "numpy")
+    second = render_unit(kernel_scene, 0, (2, 6), (0, 0, 8, 8), 3, "numpy")
+    right = render_unit(kernel_scene, 0, (0, 6), (5, 2, 3, 6), 3, "numpy")
+    for index in range(2):
+        np.testing.assert_allclose(first[index] + second[index], whole[index], rtol=1e-12)
+        np.testing.assert_allclose(right[index], whole[index][2:, 5:], rtol=1e-12)
+
+
+def test_chunks_do_not_change_the_image(kernel_scene, monkeypatch):
+    """Tracing the tile's paths in many small chunks (boundaries inside pixels) gives the same sums."""
+    whole = render_unit(kernel_scene, 0, (0, 6), (0, 0, 8, 8), 3, "numpy")
+    monkeypatch.setattr(numpy_backend, "CHUNK_PATHS", 50)
+    chunked = render_unit(kernel_scene, 0, (0, 6), (0, 0, 8, 8), 3, "numpy")
+    for index in range(2):
+        np.testing.assert_allclose(chunked[index], whole[index], rtol=1e-12)
