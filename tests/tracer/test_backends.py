@@ -10,6 +10,7 @@ traces all of a film's paths as one wavefront.
 """
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -231,7 +232,7 @@ def test_numpy_backend_runs_without_numba():
     """In a process where `import numba` fails, the NumPy backend renders, and gives the same image as
     here (where the shared math is compiled by Numba for the other backend, but called plainly here)."""
     done = subprocess.run([sys.executable, "-c", NO_NUMBA], cwd=REPO, capture_output=True, text=True, timeout=300,
-                          env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
+                          env={**os.environ, "PYTHONPATH": str(REPO)})
     assert done.returncode == 0, done.stderr
     report = json.loads(done.stdout.strip().splitlines()[-1])
     assert report["blocked"] and not report["numba_loaded"]

@@ -645,6 +645,8 @@ def _bounce(ks, paths, radiance):
     real = (vertex.event == EVENT_SCATTER) | (vertex.event == EVENT_FLUORESCE)
     real &= paths.depth + 1 <= ks.max_depth
     paths, vertex = paths.take(real), vertex.take(real)
+    if not len(paths):
+        return paths
     paths.depth += 1
     paths.o = vertex.q
     isotropic = vertex.event == EVENT_FLUORESCE
