@@ -30,6 +30,7 @@ CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
 INF = np.inf
 INV_FOUR_PI = 0.25 / np.pi
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
+SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75  # as in the Numba kernel
 PHASE_RAYLEIGH = PHASE_KINDS["rayleigh"]
 PERSPECTIVE = CAMERA_KINDS["perspective"]
 SUN, ENVIRONMENT, SKY, SPOT = LIGHT_KINDS["sun"], LIGHT_KINDS["environment"], LIGHT_KINDS["sky"], LIGHT_KINDS["spot"]
@@ -558,7 +559,8 @@ def _fluoresce(ks, paths, vertex, rows):
 
 def _transmittance(ks, paths, rows, origins, directions, t_max, lams):
     """Ratio tracking along shadow rays (ray k from path rows[k]): the transmittance per wavelength and
-    the product of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) (for MIS)."""
+    the product of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) (for MIS). Faint rays
+    (every transmittance below SHADOW_ROULETTE_BELOW) play Russian roulette at each tentative collision."""
     transmittance = np.ones(lams.shape)
     null_ratio = np.ones(lams.shape)
 
@@ -568,7 +570,14 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams):
         sigma_n = np.maximum(0.0, bar - c.sigma_a - c.sigma_s)
         transmittance[rays] *= sigma_n / bar
         null_ratio[rays] *= sigma_n / (bar + c.sigma_fl)
-        return ~np.any(transmittance[rays] > 0.0, axis=1)
+        largest = np.max(transmittance[rays], axis=1, initial=0.0)
+        faint = np.flatnonzero((largest > 0.0) & (largest < SHADOW_ROULETTE_BELOW))
+        lost = _draw(paths, rows[rays[faint]]) < SHADOW_ROULETTE_STOP
+        transmittance[rays[faint[lost]]] = 0.0
+        transmittance[rays[faint[~lost]]] /= 1.0 - SHADOW_ROULETTE_STOP
+        stop = largest == 0.0
+        stop[faint[lost]] = True
+        return stop
 
     _track(ks, paths, rows, origins, directions, t_max, collide)
     return transmittance, null_ratio
