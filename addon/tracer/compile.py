@@ -19,6 +19,9 @@ from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 LIGHT_KINDS = {"sun": 0, "environment": 1, "sky": 2, "point": 3, "spot": 4}
 PHASE_KINDS = {"hg": 0, "rayleigh": 1}
 CAMERA_KINDS = {"perspective": 0, "orthographic": 1}
+MAX_WAVELENGTHS_PER_PATH = 4
+# Shadow rays whose every transmittance is below this play Russian roulette, stopping with this probability.
+SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
 
 
 class KernelScene(NamedTuple):
@@ -271,6 +274,9 @@ def default_band(settings) -> tuple[float, float]:
 def compile_scene(scene: Scene) -> KernelScene:
     """The kernel data for the whole wavelength range; `with_band` restricts it to one band."""
     settings = scene.settings
+    if not 1 <= settings.wavelengths_per_path <= MAX_WAVELENGTHS_PER_PATH:
+        raise SpectralError(f"wavelengths per path must be between 1 and {MAX_WAVELENGTHS_PER_PATH}, "
+                            f"got {settings.wavelengths_per_path}")
     media = _media_arrays(scene.media)
     lights = _light_arrays(scene.lights, scene.media)
     camera = scene.camera

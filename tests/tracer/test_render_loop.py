@@ -49,3 +49,12 @@ def test_bands_together_estimate_the_whole_spectrum():
     mean = film.xyz.reshape(-1, 3).mean(axis=0)
     error = np.sqrt(film.variance.reshape(-1, 3).sum(axis=0)) / (film.width * film.height)
     assert np.all(np.abs(mean - expected) <= 4 * error), (mean, expected, error)
+
+
+def test_more_wavelengths_per_path_than_the_kernels_carry_is_refused():
+    import pytest
+
+    from addon.tracer.errors import SpectralError
+
+    with pytest.raises(SpectralError, match="wavelengths per path must be between 1 and 4"):
+        render(furnace(spp=1, wavelengths_per_path=8))

@@ -22,7 +22,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos
+from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
+from ..compile import MAX_WAVELENGTHS_PER_PATH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
 from ..planck import planck_radiance
 from ..sampling import pdf_binned, sample_binned
 from .numba_cache import discard_stale_cache
@@ -30,7 +31,7 @@ from .rng import path_key, uniform
 
 discard_stale_cache()
 
-MAX_LAMBDAS = 4
+MAX_LAMBDAS = MAX_WAVELENGTHS_PER_PATH
 INF = np.inf
 LIGHT_SUN, LIGHT_ENVIRONMENT, LIGHT_SKY, LIGHT_POINT, LIGHT_SPOT = 0, 1, 2, 3, 4
 PHASE_HG, PHASE_RAYLEIGH = 0, 1
@@ -38,7 +39,6 @@ EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
 # Rows of the per-path spectral cache spec[medium, row, wavelength] (filled when wavelengths change).
 SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO = 0, 1, 2, 3, 4
 SPEC_ROWS = 5
-SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
 
 
 # ----------------------------------------------------------------------------- small helpers
@@ -80,22 +80,6 @@ def _transform_vector(m, x, y, z):
 def _normalize(x, y, z):
     inv = 1.0 / math.sqrt(x * x + y * y + z * z)
     return x * inv, y * inv, z * inv
-
-
-@njit(inline="always")
-def _direction_from_cos(dx, dy, dz, cos_theta, u):
-    """A unit vector at angle acos(cos_theta) from (dx, dy, dz), azimuth 2πu (branch-free frame)."""
-    sign = math.copysign(1.0, dz)
-    a = -1.0 / (sign + dz)
-    b = dx * dy * a
-    t1 = (1.0 + sign * dx * dx * a, sign * b, -sign * dx)
-    t2 = (b, sign + dy * dy * a, -dy)
-    sin_theta = math.sqrt(max(0.0, 1.0 - cos_theta * cos_theta))
-    phi = 2.0 * math.pi * u
-    cp, sp = math.cos(phi) * sin_theta, math.sin(phi) * sin_theta
-    return (cp * t1[0] + sp * t2[0] + cos_theta * dx,
-            cp * t1[1] + sp * t2[1] + cos_theta * dy,
-            cp * t1[2] + sp * t2[2] + cos_theta * dz)
 
 
 @njit(inline="always")
@@ -419,7 +403,7 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
                 radiance[i] = _table(ks.light_spd[light], lams[i])
             return to_sun[0], to_sun[1], to_sun[2], 1.0, INF, True
         cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
-        wx, wy, wz = _direction_from_cos(to_sun[0], to_sun[1], to_sun[2], cos_theta, u2)
+        wx, wy, wz = sample_direction((to_sun[0], to_sun[1], to_sun[2]), cos_theta, u2)
         for i in range(n):
             radiance[i] = _infinite_radiance(ks, light, lams[i], wx, wy, wz)
         return wx, wy, wz, 1.0 / _sun_solid_angle(ks, light), INF, False
@@ -669,7 +653,7 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, 
                 new_cos = rayleigh_sample_cos(u1)
             else:
                 new_cos = hg_sample_cos(spec[medium, SPEC_ANISOTROPY, 0], u1)
-        nx, ny, nz = _direction_from_cos(dx, dy, dz, new_cos, u2)
+        nx, ny, nz = sample_direction((dx, dy, dz), new_cos, u2)
         if isotropic:
             for i in range(n):
                 phase_values[i] = 0.25 / math.pi

@@ -11,7 +11,8 @@ from pathlib import Path
 TRACER = Path(__file__).resolve().parent.parent
 CACHE = Path(__file__).resolve().parent / "__pycache__"
 STAMP = CACHE / "kernel-sources.sha256"
-KERNEL_SOURCES = ("kernels/*.py", "phase.py", "sampling.py", "planck.py", "shared_math.py")
+KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "compile.py", "phase.py", "sampling.py", "planck.py",
+                  "shared_math.py", "wavelengths.py")
 
 
 def sources_digest() -> str:

@@ -19,8 +19,8 @@ which can send a path down another branch). Masked lanes may compute values that
 
 import numpy as np
 
-from ..compile import CAMERA_KINDS, LIGHT_KINDS, PHASE_KINDS
-from ..phase import hg_pdf, hg_sample_cos, orthonormal_basis, rayleigh_pdf, rayleigh_sample_cos
+from ..compile import CAMERA_KINDS, LIGHT_KINDS, PHASE_KINDS, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
+from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
 from ..sampling import pdf_binned, sample_binned
 from ..wavelengths import GRID, LAMBDA_MIN
@@ -30,7 +30,6 @@ CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
 INF = np.inf
 INV_FOUR_PI = 0.25 / np.pi
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
-SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75  # as in the Numba kernel
 PHASE_RAYLEIGH = PHASE_KINDS["rayleigh"]
 PERSPECTIVE = CAMERA_KINDS["perspective"]
 SUN, ENVIRONMENT, SKY, SPOT = LIGHT_KINDS["sun"], LIGHT_KINDS["environment"], LIGHT_KINDS["sky"], LIGHT_KINDS["spot"]
@@ -99,14 +98,9 @@ def _normalize(v):
     return v * inv[:, None]
 
 
-def _direction_from_cos(d, cos_theta, u):
-    """Unit vectors at angle acos(cos_theta) from the rows of `d`, azimuth 2πu (the Numba kernel's frame
-    and arithmetic, so that both backends turn the same numbers into the same directions)."""
-    t1, t2 = orthonormal_basis((d[:, 0], d[:, 1], d[:, 2]))
-    sin_theta = np.sqrt(np.maximum(0.0, 1.0 - cos_theta * cos_theta))
-    phi = 2.0 * np.pi * u
-    cp, sp = np.cos(phi) * sin_theta, np.sin(phi) * sin_theta
-    return np.stack([cp * t1[k] + sp * t2[k] + cos_theta * d[:, k] for k in range(3)], axis=1)
+def _direction(d, cos_theta, u):
+    """Rows of unit vectors at angle acos(cos_theta) from the rows of `d`, azimuth 2πu."""
+    return np.stack(sample_direction((d[:, 0], d[:, 1], d[:, 2]), cos_theta, u), axis=1)
 
 
 def _mean(values):
@@ -405,7 +399,7 @@ def _sample_light(ks, light, points, u1, u2, lams):
                 True, _table(ks.light_spd[light], at))
     if kind == SUN:
         cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
-        w = _direction_from_cos(np.broadcast_to(ks.light_dir[light], (count, 3)), cos_theta, u2)
+        w = _direction(np.broadcast_to(ks.light_dir[light], (count, 3)), cos_theta, u2)
         pdf = np.full(count, 1.0 / _sun_solid_angle(ks, light))
         return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, at, w)
     if kind == ENVIRONMENT or kind == SKY:
@@ -621,7 +615,7 @@ def _sample_phase(ks, paths, vertex, isotropic):
             new_cos[rows] = rayleigh_sample_cos(u1[rows])
         else:
             new_cos[rows] = hg_sample_cos(_table(ks.anisotropy[m], _at(paths.lams[rows, 0])), u1[rows])
-    direction = _direction_from_cos(paths.d, new_cos, u2)
+    direction = _direction(paths.d, new_cos, u2)
     phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
                             _mixture_phase(ks, vertex.medium_s, paths.lams, new_cos))
     pdf0 = phase_values[:, :1]
