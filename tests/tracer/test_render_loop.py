@@ -2,7 +2,9 @@
 per-wavelength bands that together estimate the whole spectrum."""
 
 import numpy as np
+import pytest
 
+from addon.tracer.errors import SpectralError
 from addon.tracer.render import pass_sizes, render
 from addon.tracer.wavelengths import GRID
 from addon.tracer import colorimetry
@@ -52,9 +54,5 @@ def test_bands_together_estimate_the_whole_spectrum():
 
 
 def test_more_wavelengths_per_path_than_the_kernels_carry_is_refused():
-    import pytest
-
-    from addon.tracer.errors import SpectralError
-
     with pytest.raises(SpectralError, match="wavelengths per path must be between 1 and 4"):
         render(furnace(spp=1, wavelengths_per_path=8))
