@@ -7,10 +7,11 @@ so adding a class means adding it to its module's list, nowhere else.
 
 import bpy
 
-from . import properties
+from . import curves
+from .props import attach, light, material, render, spectrum
 from .ui import sidebar
 
-MODULES = (properties, sidebar)
+MODULES = (curves, spectrum, material, light, render, attach, sidebar)
 
 
 def register():
