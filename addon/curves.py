@@ -68,6 +68,14 @@ def ensure(curve: SpectralCurve, y_range=(0.0, 1.0), wavelengths=(LAMBDA_MIN, LA
     return mapping
 
 
+def discard(curve: SpectralCurve) -> None:
+    """Remove the curve's node (when its setting goes away)."""
+    node = find_node(curve)
+    if node is not None:
+        node.id_data.nodes.remove(node)
+    curve.node = ""
+
+
 def set_points(mapping, wavelengths, values) -> None:
     """Replace the curve's points by (wavelength nm, value) pairs (at least two) and update it."""
     points = mapping.curves[0].points

@@ -2,17 +2,17 @@
 
 import bpy
 
-from .light import LightSettings, WorldSettings
-from .material import VolumeMaterialSettings
-from .render import ObjectVolumeSettings, SpectralRenderSettings
+from .light import SpectralLightSettings, SpectralWorldSettings
+from .material import SpectralMaterialSettings
+from .render import SpectralObjectSettings, SpectralRenderSettings
 
 CLASSES = ()
 ATTACHMENTS = (
     (bpy.types.Scene, SpectralRenderSettings),
-    (bpy.types.Material, VolumeMaterialSettings),
-    (bpy.types.Light, LightSettings),
-    (bpy.types.World, WorldSettings),
-    (bpy.types.Object, ObjectVolumeSettings),
+    (bpy.types.Material, SpectralMaterialSettings),
+    (bpy.types.Light, SpectralLightSettings),
+    (bpy.types.World, SpectralWorldSettings),
+    (bpy.types.Object, SpectralObjectSettings),
 )
 
 

@@ -7,27 +7,27 @@ environment light or a sky that blends a zenith and a horizon spectrum.
 
 import bpy
 
-from .spectrum import LightSpectrum
+from .spectrum import SpectralLightSpectrum
 
 
-class LightSettings(bpy.types.PropertyGroup):
-    spectrum: bpy.props.PointerProperty(type=LightSpectrum)
+class SpectralLightSettings(bpy.types.PropertyGroup):
+    spectrum: bpy.props.PointerProperty(type=SpectralLightSpectrum)
     curve_group: bpy.props.PointerProperty(type=bpy.types.NodeTree, name="Curves",
                                            description="Hidden node group holding this light's spectral curves")
 
 
-class WorldSettings(bpy.types.PropertyGroup):
+class SpectralWorldSettings(bpy.types.PropertyGroup):
     enabled: bpy.props.BoolProperty(name="Spectral World", description="Light the scene from the world",
                                     default=True)
     kind: bpy.props.EnumProperty(name="Type", items=[
         ("environment", "Uniform", "The same light from every direction"),
         ("sky", "Sky", "Zenith spectrum overhead, blending into the horizon spectrum")], default="environment")
-    spectrum: bpy.props.PointerProperty(type=LightSpectrum)
-    horizon: bpy.props.PointerProperty(type=LightSpectrum)
+    spectrum: bpy.props.PointerProperty(type=SpectralLightSpectrum)
+    horizon: bpy.props.PointerProperty(type=SpectralLightSpectrum)
     strength: bpy.props.FloatProperty(name="Strength", description="Luminance of the world light",
                                       default=1.0, min=0.0, soft_max=10.0)
     curve_group: bpy.props.PointerProperty(type=bpy.types.NodeTree, name="Curves",
                                            description="Hidden node group holding the world's spectral curves")
 
 
-CLASSES = (LightSettings, WorldSettings)
+CLASSES = (SpectralLightSettings, SpectralWorldSettings)

@@ -7,36 +7,36 @@ table over density levels, anisotropy, phase function, fluorescence and blackbod
 
 import bpy
 
-from .spectrum import AlbedoSpectrum, AnisotropySpectrum, EmissionSpectrum, ExcitationSpectrum, ExtinctionSpectrum
+from .spectrum import SpectralAlbedoSpectrum, SpectralAnisotropySpectrum, SpectralEmissionSpectrum, SpectralExcitationSpectrum, SpectralExtinctionSpectrum
 
 
-class AlbedoLevel(bpy.types.PropertyGroup):
+class SpectralAlbedoLevel(bpy.types.PropertyGroup):
     """The albedo spectrum at one density level above 0; between levels the albedo is interpolated."""
 
     density: bpy.props.FloatProperty(name="Density", description="Grid density (before Density Scale) of this level",
                                      default=1.0, min=0.0, soft_max=10.0)
-    spectrum: bpy.props.PointerProperty(type=AlbedoSpectrum)
+    spectrum: bpy.props.PointerProperty(type=SpectralAlbedoSpectrum)
 
 
-class VolumeMaterialSettings(bpy.types.PropertyGroup):
+class SpectralMaterialSettings(bpy.types.PropertyGroup):
     enabled: bpy.props.BoolProperty(name="Spectral Volume", description="Render this material's volume spectrally",
                                     default=False)
     density_scale: bpy.props.FloatProperty(name="Density Scale", description="Multiplies the density grid",
                                            default=1.0, min=1e-6, soft_max=100.0)
-    extinction: bpy.props.PointerProperty(type=ExtinctionSpectrum)
-    albedo: bpy.props.PointerProperty(type=AlbedoSpectrum)
-    albedo_levels: bpy.props.CollectionProperty(type=AlbedoLevel,
+    extinction: bpy.props.PointerProperty(type=SpectralExtinctionSpectrum)
+    albedo: bpy.props.PointerProperty(type=SpectralAlbedoSpectrum)
+    albedo_levels: bpy.props.CollectionProperty(type=SpectralAlbedoLevel,
                                                 description="Albedo at higher densities (the first albedo is at 0)")
     albedo_index: bpy.props.IntProperty(name="Active Albedo Level", min=0)
-    anisotropy: bpy.props.PointerProperty(type=AnisotropySpectrum)
+    anisotropy: bpy.props.PointerProperty(type=SpectralAnisotropySpectrum)
     phase: bpy.props.EnumProperty(name="Phase", description="Phase function",
                                   items=[("hg", "Henyey–Greenstein", "Forward or backward scattering by the anisotropy g"),
                                          ("rayleigh", "Rayleigh", "Scattering by particles much smaller than the wavelength")],
                                   default="hg")
     use_fluorescence: bpy.props.BoolProperty(name="Fluorescence",
                                              description="Absorb the excitation band and re-emit at longer wavelengths")
-    excitation: bpy.props.PointerProperty(type=ExcitationSpectrum)
-    emission: bpy.props.PointerProperty(type=EmissionSpectrum)
+    excitation: bpy.props.PointerProperty(type=SpectralExcitationSpectrum)
+    emission: bpy.props.PointerProperty(type=SpectralEmissionSpectrum)
     quantum_yield: bpy.props.FloatProperty(name="Quantum Yield", description="Fraction of absorbed light re-emitted",
                                            default=0.9, min=0.0, max=1.0, subtype="FACTOR")
     use_blackbody: bpy.props.BoolProperty(name="Blackbody Emission", description="Glow by the temperature grid (fire)")
@@ -53,4 +53,4 @@ class VolumeMaterialSettings(bpy.types.PropertyGroup):
                                            description="Hidden node group holding this material's spectral curves")
 
 
-CLASSES = (AlbedoLevel, VolumeMaterialSettings)
+CLASSES = (SpectralAlbedoLevel, SpectralMaterialSettings)

@@ -6,6 +6,7 @@ from ..tracer.scene import RenderSettings
 from ..tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
 
 DEFAULTS = RenderSettings()
+ENGINE_ID = "SPECTRAL_VOLUME"  # the render engine's bl_idname; its panels show while it is the engine
 
 
 class SpectralRenderSettings(bpy.types.PropertyGroup):
@@ -42,7 +43,7 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
         name="Scheduler", description="Dask scheduler to render on (tcp://host:port); empty: this computer")
 
 
-class ObjectVolumeSettings(bpy.types.PropertyGroup):
+class SpectralObjectSettings(bpy.types.PropertyGroup):
     """How an object becomes a medium: the density grid to read, or the voxel size for meshes."""
 
     density_grid: bpy.props.StringProperty(name="Density Grid", default="density",
@@ -51,4 +52,4 @@ class ObjectVolumeSettings(bpy.types.PropertyGroup):
                                         default=0.05, min=1e-4, soft_max=1.0, subtype="DISTANCE", unit="LENGTH")
 
 
-CLASSES = (SpectralRenderSettings, ObjectVolumeSettings)
+CLASSES = (SpectralRenderSettings, SpectralObjectSettings)

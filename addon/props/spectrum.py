@@ -91,11 +91,11 @@ class SpectrumFields:
                                            subtype="COLOR", size=3, get=_preview)
 
 
-class LightSpectrum(SpectrumFields, bpy.types.PropertyGroup):
+class SpectralLightSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     """The shape of a light's spectrum; its brightness is the light's own Power or Strength."""
 
     ROLE = "light"
-    source: _source(("ILLUMINANT", "BLACKBODY", "COLOR", "CURVE", "CSV"), "ILLUMINANT")
+    source: _source(("ILLUMINANT", "BLACKBODY", "BAND", "GAUSSIAN", "COLOR", "CURVE", "CSV"), "ILLUMINANT")
     use_window: bpy.props.BoolProperty(name="Wavelength Window",
                                        description="Keep only the wavelengths between Min and Max")
     window_min: bpy.props.FloatProperty(name="Min", description="Shortest wavelength kept (nm)", default=380.0,
@@ -104,7 +104,7 @@ class LightSpectrum(SpectrumFields, bpy.types.PropertyGroup):
                                         min=LAMBDA_MIN, max=LAMBDA_MAX)
 
 
-class AlbedoSpectrum(SpectrumFields, bpy.types.PropertyGroup):
+class SpectralAlbedoSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     """Single-scattering albedo over wavelength, in [0, 1]."""
 
     ROLE = "reflectance"
@@ -114,7 +114,7 @@ class AlbedoSpectrum(SpectrumFields, bpy.types.PropertyGroup):
                                    default=0.9, min=0.0, max=1.0, subtype="FACTOR")
 
 
-class ExtinctionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
+class SpectralExtinctionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     """Extinction per unit density over wavelength (multiplied by the density scale)."""
 
     ROLE = "absorption"
@@ -123,7 +123,7 @@ class ExtinctionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
                                    default=1.0, min=0.0, soft_max=10.0)
 
 
-class AnisotropySpectrum(SpectrumFields, bpy.types.PropertyGroup):
+class SpectralAnisotropySpectrum(SpectrumFields, bpy.types.PropertyGroup):
     """Henyey–Greenstein g over wavelength: 0 isotropic, > 0 forward, < 0 backward scattering."""
 
     ROLE = ""
@@ -134,7 +134,7 @@ class AnisotropySpectrum(SpectrumFields, bpy.types.PropertyGroup):
                                    default=0.0, min=-0.99, max=0.99, subtype="FACTOR")
 
 
-class ExcitationSpectrum(SpectrumFields, bpy.types.PropertyGroup):
+class SpectralExcitationSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     """How strongly a fluorophore absorbs each wavelength, per unit density."""
 
     ROLE = "absorption"
@@ -143,12 +143,12 @@ class ExcitationSpectrum(SpectrumFields, bpy.types.PropertyGroup):
                                    default=1.0, min=0.0, soft_max=10.0)
 
 
-class EmissionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
+class SpectralEmissionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     """The colour a fluorophore re-emits (a shape: it is normalised)."""
 
     ROLE = "light"
     source: _source(("GAUSSIAN", "CURVE", "CSV"), "GAUSSIAN")
 
 
-CLASSES = (LightSpectrum, AlbedoSpectrum, ExtinctionSpectrum, AnisotropySpectrum, ExcitationSpectrum,
-           EmissionSpectrum)
+CLASSES = (SpectralLightSpectrum, SpectralAlbedoSpectrum, SpectralExtinctionSpectrum, SpectralAnisotropySpectrum, SpectralExcitationSpectrum,
+           SpectralEmissionSpectrum)

@@ -16,8 +16,7 @@ OWNERS = ("Scene", "Material", "Light", "World", "Object")
 
 
 def _our_types():
-    return {name for name in dir(bpy.types) if name.startswith("SPECTRAL_") or "Spectrum" in name
-            or name.endswith("VolumeSettings") or name in ("SpectralCurve", "AlbedoLevel")}
+    return {name for name in dir(bpy.types) if name.startswith(("SPECTRAL_", "Spectral"))}
 
 
 def test_register_unregister_leaves_no_trace(clean):
