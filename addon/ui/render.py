@@ -2,6 +2,7 @@
 
 import bpy
 
+from ..export.fluids import fluid_domain
 from ..props.render import ENGINE_ID
 
 
@@ -25,17 +26,11 @@ def draw_wavelengths(layout, scene) -> None:
 
 def draw_object(layout, obj) -> None:
     settings = obj.spectral
-    if obj.type == "VOLUME" or _fluid_domain(obj) is not None:
+    domain = obj.type == "MESH" and fluid_domain(obj) is not None
+    if obj.type == "VOLUME" or domain:
         layout.prop(settings, "density_grid")
-    if obj.type == "MESH" and _fluid_domain(obj) is None:
+    if obj.type == "MESH" and not domain:
         layout.prop(settings, "voxel_size")
-
-
-def _fluid_domain(obj):
-    for modifier in obj.modifiers:
-        if modifier.type == "FLUID" and modifier.fluid_type == "DOMAIN":
-            return modifier.domain_settings
-    return None
 
 
 class RenderPanel:
