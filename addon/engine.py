@@ -1,8 +1,22 @@
-"""The "Spectral Volume" render engine (F12, bpy.ops.render.render, animation renders)."""
+"""The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders.
+
+Each frame is exported from the render depsgraph and rendered in passes of doubling sample counts;
+after every pass the Render Result is updated (Combined as linear Rec.709, plus the XYZ and
+XYZ Variance passes, which the compositor and multilayer EXR output see), progress is reported and
+Esc (`test_break`) stops the render between passes. Bad input is reported as an error and renders
+nothing, so Blender writes no output file.
+"""
 
 import bpy
 
+from .export.scene import export_scene
+from .pixels import blender_rows, with_alpha
 from .props.render import ENGINE_ID
+from .tracer.errors import SpectralError
+from .tracer.render import render
+
+XYZ_PASS = "XYZ"
+VARIANCE_PASS = "XYZ Variance"
 
 
 class SpectralVolumeEngine(bpy.types.RenderEngine):
@@ -10,8 +24,46 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     bl_label = "Spectral Volume"
     bl_use_preview = False
 
+    def update_render_passes(self, scene=None, renderlayer=None):
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
+        self.register_pass(scene, renderlayer, XYZ_PASS, 3, "XYZ", "COLOR")
+        self.register_pass(scene, renderlayer, VARIANCE_PASS, 3, "XYZ", "COLOR")
+
     def render(self, depsgraph):
-        self.report({"ERROR"}, "Spectral Volume: rendering is not implemented yet")
+        try:
+            export = export_scene(depsgraph)
+        except SpectralError as problem:
+            self.report({"ERROR"}, str(problem))
+            return
+        for warning in export.warnings:
+            self.report({"WARNING"}, warning)
+        if depsgraph.scene.spectral.scheduler_address:
+            self.report({"WARNING"}, "distributed rendering is not available yet: rendering on this computer")
+        camera = export.scene.camera
+        if (camera.width, camera.height) != (self.resolution_x, self.resolution_y):
+            self.report({"ERROR"}, "render region (border) and crop are not supported: turn Render Region off")
+            return
+        result = self.begin_result(0, 0, camera.width, camera.height)
+        spp = export.scene.settings.spp
+
+        def progress(film, fraction):
+            self._write(result, film)
+            self.update_result(result)
+            self.update_progress(fraction)
+            self.update_stats("", f"Spectral Volume | {int(film.samples.min())}/{spp} samples")
+
+        try:
+            render(export.scene, progress=progress, cancel=self.test_break)
+        except SpectralError as problem:
+            self.report({"ERROR"}, str(problem))
+        self.end_result(result)
+
+    @staticmethod
+    def _write(result, film) -> None:
+        passes = result.layers[0].passes
+        passes["Combined"].rect = blender_rows(with_alpha(film.rgb()))
+        passes[XYZ_PASS].rect = blender_rows(film.xyz)
+        passes[VARIANCE_PASS].rect = blender_rows(film.variance)
 
 
 CLASSES = (SpectralVolumeEngine,)
