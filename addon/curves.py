@@ -3,6 +3,8 @@
 Each curve is a Float Curve node in a hidden node group (name starting with ".") that its owner
 (a Material, Light or World) points at through `owner.spectral.curve_group`, so the group is saved,
 appended and linked together with its owner. A `SpectralCurve` property names its node in that group.
+Copying the owner copies the pointer, not the group: the copies share their curves until
+`make_single_user` gives one its own group (the panels offer it while the group has several users).
 
 Blender limits a curve's clipping rectangle to ±100, so x is the wavelength in hundreds of nanometres
 (`NM_PER_X`): x = 5.5 is 550 nm. The panels print the selected point in nanometres.
@@ -66,6 +68,19 @@ def ensure(curve: SpectralCurve, y_range=(0.0, 1.0), wavelengths=(LAMBDA_MIN, LA
         values = [0.5 * (y_range[0] + y_range[1])] * len(wavelengths)
     set_points(mapping, wavelengths, values)
     return mapping
+
+
+def is_shared(owner) -> bool:
+    group = owner.spectral.curve_group
+    return group is not None and group.users > 1
+
+
+def make_single_user(owner) -> None:
+    """Give `owner` its own copy of a shared curve group (node names, and so the references, stay)."""
+    if is_shared(owner):
+        group = owner.spectral.curve_group.copy()
+        group.name = f"{GROUP_PREFIX} {owner.name}"
+        owner.spectral.curve_group = group
 
 
 def discard(curve: SpectralCurve) -> None:

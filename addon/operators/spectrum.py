@@ -70,4 +70,20 @@ class SPECTRAL_OT_spectrum_to_curve(TargetProperties, bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (SPECTRAL_OT_import_spectrum_csv, SPECTRAL_OT_spectrum_to_curve)
+class SPECTRAL_OT_curves_single_user(TargetProperties, bpy.types.Operator):
+    """Give this data block its own copy of the spectral curves it shares with a copy of itself"""
+
+    bl_idname = "spectral.curves_single_user"
+    bl_label = "Make Curves Single-User"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        settings = resolve(self)
+        if settings is None:
+            self.report({"ERROR"}, "The spectrum no longer exists")
+            return {"CANCELLED"}
+        curves.make_single_user(settings.id_data)
+        return {"FINISHED"}
+
+
+CLASSES = (SPECTRAL_OT_import_spectrum_csv, SPECTRAL_OT_spectrum_to_curve, SPECTRAL_OT_curves_single_user)

@@ -69,6 +69,10 @@ def _draw_curve(column, settings) -> None:
     if node is None:
         column.label(text="The curve is missing", icon="ERROR")
         return
+    if curves.is_shared(settings.id_data):
+        row = column.row()
+        row.label(text="Curves shared with a copy", icon="ERROR")
+        point_at(row.operator("spectral.curves_single_user", text="Make Single-User"), settings)
     column.template_curve_mapping(node, "mapping")
     selected = curves.selected_points(node.mapping)
     if len(selected) == 1:

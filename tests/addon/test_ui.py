@@ -188,3 +188,17 @@ def test_missing_curve_is_reported_not_raised(registered):
     from addon.export.spectra import to_spectrum
     with pytest.raises(SpectralError, match="the curve is missing"):
         to_spectrum(albedo)
+
+
+def test_copied_material_can_make_its_curves_its_own(registered):
+    material = bpy.data.materials.new("Original")
+    material.spectral.albedo.source = "CURVE"
+    copy = material.copy()
+    assert copy.spectral.curve_group == material.spectral.curve_group and curves.is_shared(copy)
+    scene, volume, _material, _lights = _scene_with_everything()
+    layout = draw(bpy.types.SPECTRAL_PT_material, _context(scene, volume, copy))
+    assert "Curves shared with a copy" in layout.texts()
+    assert bpy.ops.spectral.curves_single_user(**_target(copy.spectral.albedo)) == {"FINISHED"}
+    assert copy.spectral.curve_group != material.spectral.curve_group and not curves.is_shared(material)
+    curves.set_points(curves.find_mapping(copy.spectral.albedo.curve), (400, 700), (0.1, 0.2))
+    assert curves.points(curves.find_mapping(material.spectral.albedo.curve))[0][1] == pytest.approx(0.9)
