@@ -96,8 +96,6 @@ def _module_main(argv) -> int:
     if not argv or argv[0] != "render":
         print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--frame N] [--spp N]", file=sys.stderr)
         return 2
-    import bpy  # noqa: F401  (loads Blender before the add-on's Blender modules)
-
     from . import register
 
     register()

@@ -9,10 +9,11 @@ from addon.export import camera as camera_export
 from addon.export.fluids import base_resolution
 from addon.export.lights import point_intensity
 from addon.export.scene import export_scene
-from addon.tracer import spectra
+from addon.tracer import grids, spectra
 from addon.tracer.errors import SpectralError
+from addon.tracer.scene import Grid
 from addon.tracer.scene_io import load_scene
-from tests.addon.builders import (PATTERN, add_camera, add_sun, add_volume, basic_scene, link, spectral_material,
+from tests.addon.builders import (PATTERN, add_camera, add_sun, basic_scene, link, spectral_material,
                                   vdb_index_to_world, write_vdb)
 
 bpy = pytest.importorskip("bpy")
@@ -132,9 +133,6 @@ def _fake_fluid_domain(tmp_path, frames=(1,)):
     settings.cache_directory = str(tmp_path / "cache")
     cells = base_resolution((4.0, 2.0, 2.0), 16)
     assert tuple(cells) == (16, 8, 8)
-    from addon.tracer import grids
-    from addon.tracer.scene import Grid
-
     (tmp_path / "cache" / "data").mkdir(parents=True)
     density = np.random.default_rng(1).uniform(0.1, 1.0, tuple(cells)).astype(np.float32)
     for frame in frames:
