@@ -5,6 +5,9 @@ after every pass the Render Result is updated (Combined as linear Rec.709, plus 
 XYZ Variance passes, which the compositor and multilayer EXR output see), progress is reported and
 Esc (`test_break`) stops the render between passes. Bad input is reported as an error and renders
 nothing, so Blender writes no output file.
+
+While it is the engine, Blender's generic panels (those offered for every engine: camera, volume file
+and grids, output, fluid physics, ...) stay visible, and the viewport's Material Preview uses EEVEE.
 """
 
 import bpy
@@ -23,6 +26,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     bl_idname = ENGINE_ID
     bl_label = "Spectral Volume"
     bl_use_preview = False
+    bl_use_eevee_viewport = True
 
     def update_render_passes(self, scene=None, renderlayer=None):
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
@@ -67,3 +71,25 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
 
 
 CLASSES = (SpectralVolumeEngine,)
+GENERIC_ENGINE = "BLENDER_RENDER"  # Blender marks the panels that suit any engine with this name
+_panels_shown = []
+
+
+def _panel_classes(base=bpy.types.Panel):
+    for cls in base.__subclasses__():
+        yield cls
+        yield from _panel_classes(cls)
+
+
+def register_extras():
+    for panel in _panel_classes():
+        engines = getattr(panel, "COMPAT_ENGINES", None)
+        if isinstance(engines, set) and GENERIC_ENGINE in engines and ENGINE_ID not in engines:
+            engines.add(ENGINE_ID)
+            _panels_shown.append(panel)
+
+
+def unregister_extras():
+    for panel in _panels_shown:
+        panel.COMPAT_ENGINES.discard(ENGINE_ID)
+    _panels_shown.clear()

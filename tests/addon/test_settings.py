@@ -19,14 +19,22 @@ def _our_types():
     return {name for name in dir(bpy.types) if name.startswith(("SPECTRAL_", "Spectral"))}
 
 
+def _all_panels(base=None):
+    for cls in (base or bpy.types.Panel).__subclasses__():
+        yield cls
+        yield from _all_panels(cls)
+
+
 def test_register_unregister_leaves_no_trace(clean):
     before = _our_types()
     addon.register()
     assert all(hasattr(getattr(bpy.types, owner), "spectral") for owner in OWNERS)
     assert _our_types() - before
+    assert "SPECTRAL_VOLUME" in bpy.types.DATA_PT_volume_file.COMPAT_ENGINES  # Blender's generic panels show
     addon.unregister()
     assert not any(hasattr(getattr(bpy.types, owner), "spectral") for owner in OWNERS)
     assert _our_types() == before
+    assert not any("SPECTRAL_VOLUME" in getattr(panel, "COMPAT_ENGINES", ()) for panel in _all_panels())
     addon.register()  # and again, as when the user toggles the add-on
     addon.unregister()
 
