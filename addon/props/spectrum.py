@@ -7,6 +7,7 @@ differently: a light's colour, a reflectance under D65, the colour transmitted t
 
 import bpy
 
+from .. import curves
 from ..curves import SpectralCurve
 from ..tracer.spectra import ILLUMINANT_NAMES, RGB_METHODS
 from ..tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
@@ -42,13 +43,11 @@ def _illuminant_items():
 
 def _source_changed(self, _context):
     if self.source == "CURVE":
-        from .. import curves
-
         curves.ensure(self.curve, self.Y_RANGE, values=(self.CURVE_DEFAULT, self.CURVE_DEFAULT))
 
 
 def _preview(self):
-    from ..export.swatch import preview_colour
+    from ..export.swatch import preview_colour  # here: export.spectra imports this module
 
     return preview_colour(self)
 
