@@ -1,7 +1,7 @@
 """Headless rendering of a .blend file to a multilayer EXR.
 
-    python -m addon.cli render FILE.blend --out OUT.exr [--frame N] [--spp N]   (bpy as a module)
-    blender -c spectral_render FILE.blend --out OUT.exr [--frame N] [--spp N]  (installed extension)
+    python -m addon.cli render FILE.blend --out OUT.exr [--frame N] [--spp N] [--scheduler ADDRESS]
+    blender -c spectral_render FILE.blend --out OUT.exr [...]   (the same, with the extension installed)
 
 Blender command ids must be Python identifiers, hence `spectral_render`. Exit codes: 0 success,
 1 bad input (message on stderr, nothing written), 2 usage error, 130 interrupted.
@@ -26,6 +26,8 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     parser.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (XYZ, RGB, variance)")
     parser.add_argument("--frame", type=int, help="frame to render (default: the file's current frame)")
     parser.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
+    parser.add_argument("--scheduler", help="Dask scheduler tcp://HOST:PORT to render on (default: the scene's "
+                                            "Render setting; empty: this computer)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
@@ -34,8 +36,8 @@ def render_blend(args) -> str:
     """Open, export, render and write; returns a one-line summary. Raises SpectralError on bad input."""
     import bpy
 
+    from . import dispatch
     from .export.scene import export_scene
-    from .tracer.render import render
 
     if not args.blend.is_file():
         raise SpectralError(f"blend file {args.blend} does not exist")
@@ -48,7 +50,8 @@ def render_blend(args) -> str:
     export = export_scene(bpy.context.evaluated_depsgraph_get())
     for warning in export.warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    result = render(export.scene, spp=args.spp, progress=None if args.quiet else ProgressBar())
+    scheduler = scene.spectral.scheduler_address if args.scheduler is None else args.scheduler
+    result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=None if args.quiet else ProgressBar())
     film = result.film
     image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
     return (f"wrote {args.out} ({film.width}×{film.height}, frame {scene.frame_current}, "

@@ -1,6 +1,7 @@
 """The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders.
 
-Each frame is exported from the render depsgraph and rendered in passes of doubling sample counts;
+Each frame is exported from the render depsgraph and rendered, here or on the Dask farm of the Render
+settings' scheduler address, in passes of doubling sample counts;
 after every pass the Render Result is updated (Combined as linear Rec.709, plus the XYZ and
 XYZ Variance passes, which the compositor and multilayer EXR output see), progress is reported and
 Esc (`test_break`) stops the render between passes. Bad input is reported as an error and renders
@@ -12,11 +13,11 @@ and grids, output, fluid physics, ...) stay visible, and the viewport's Material
 
 import bpy
 
+from . import dispatch
 from .export.scene import export_scene
 from .pixels import blender_rows, with_alpha
 from .props.render import ENGINE_ID
 from .tracer.errors import SpectralError
-from .tracer.render import render
 
 XYZ_PASS = "XYZ"
 VARIANCE_PASS = "XYZ Variance"
@@ -41,8 +42,6 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             return
         for warning in export.warnings:
             self.report({"WARNING"}, warning)
-        if depsgraph.scene.spectral.scheduler_address:
-            self.report({"WARNING"}, "distributed rendering is not available yet: rendering on this computer")
         camera = export.scene.camera
         if (camera.width, camera.height) != (self.resolution_x, self.resolution_y):
             self.report({"ERROR"}, "render region (border) and crop are not supported: turn Render Region off")
@@ -57,7 +56,8 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             self.update_stats("", f"Spectral Volume | {int(film.samples.min())}/{spp} samples")
 
         try:
-            render(export.scene, progress=progress, cancel=self.test_break)
+            dispatch.run(export.scene, depsgraph.scene.original.spectral.scheduler_address, progress=progress,
+                         cancel=self.test_break)
         except SpectralError as problem:
             self.report({"ERROR"}, str(problem))
         self.end_result(result)

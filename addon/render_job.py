@@ -1,4 +1,4 @@
-"""A tracer render on a background thread, polled from Blender's main thread.
+"""A tracer render (here or on a Dask farm) on a background thread, polled from Blender's main thread.
 
 The Numba kernel releases the GIL, so Blender stays responsive. The thread never touches `bpy`: it
 gets a finished tracer Scene and leaves a RenderResult (or an error message) behind.
@@ -6,14 +6,14 @@ gets a finished tracer Scene and leaves a RenderResult (or an error message) beh
 
 import threading
 
+from . import dispatch
 from .tracer.errors import SpectralError
-from .tracer.render import render
 from .tracer.scene import Scene
 
 
 class RenderJob:
-    def __init__(self, scene: Scene):
-        self.scene = scene
+    def __init__(self, scene: Scene, scheduler: str = ""):
+        self.scene, self.scheduler = scene, scheduler
         self.fraction = 0.0
         self.result = None
         self.error = None
@@ -26,7 +26,7 @@ class RenderJob:
     def run(self) -> None:
         """Render in the calling thread (what the background thread runs)."""
         try:
-            self.result = render(self.scene, progress=self._progress, cancel=self._cancel.is_set)
+            self.result = dispatch.run(self.scene, self.scheduler, progress=self._progress, cancel=self._cancel.is_set)
         except SpectralError as problem:
             self.error = str(problem)
         except Exception as problem:  # noqa: BLE001 - reported to the user instead of dying silently

@@ -43,8 +43,8 @@ def export_medium(name: str, material, density: Grid, temperature: Grid | None) 
     densities, table = albedo_table(settings)
     fluorescence = None
     if settings.use_fluorescence:
-        fluorescence = Fluorescence(excitation=to_spectrum(settings.excitation), emission=to_spectrum(settings.emission),
-                                    quantum_yield=settings.quantum_yield)
+        fluorescence = Fluorescence(excitation=to_spectrum(settings.excitation),
+                                    emission=to_spectrum(settings.emission), quantum_yield=settings.quantum_yield)
     emission = None
     if settings.use_blackbody:
         if temperature is None:

@@ -32,9 +32,10 @@ def render_settings(scene) -> RenderSettings:
     s = scene.original.spectral
     if s.lambda_min >= s.lambda_max:
         raise SpectralError(f"render settings: the wavelength range {s.lambda_min:g}–{s.lambda_max:g} nm is empty")
-    return RenderSettings(spp=s.samples, seed=s.seed, max_depth=s.max_bounces, wavelength_sampling=s.wavelength_sampling,
-                          wavelengths_per_path=int(s.wavelengths_per_path), lambda_min=s.lambda_min,
-                          lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf, backend=s.backend)
+    return RenderSettings(spp=s.samples, seed=s.seed, max_depth=s.max_bounces,
+                          wavelength_sampling=s.wavelength_sampling, wavelengths_per_path=int(s.wavelengths_per_path),
+                          lambda_min=s.lambda_min, lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf,
+                          backend=s.backend)
 
 
 def _medium(obj, depsgraph):

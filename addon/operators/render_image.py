@@ -38,9 +38,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             return None
         for warning in export.warnings:
             self.report({"WARNING"}, warning)
-        if context.scene.spectral.scheduler_address:
-            self.report({"WARNING"}, "distributed rendering is not available yet: rendering on this computer")
-        return RenderJob(export.scene)
+        return RenderJob(export.scene, context.scene.spectral.scheduler_address)
 
     def _finish(self, job: RenderJob) -> set:
         if job.error is not None:

@@ -7,7 +7,8 @@ table over density levels, anisotropy, phase function, fluorescence and blackbod
 
 import bpy
 
-from .spectrum import SpectralAlbedoSpectrum, SpectralAnisotropySpectrum, SpectralEmissionSpectrum, SpectralExcitationSpectrum, SpectralExtinctionSpectrum
+from .spectrum import (SpectralAlbedoSpectrum, SpectralAnisotropySpectrum, SpectralEmissionSpectrum,
+                       SpectralExcitationSpectrum, SpectralExtinctionSpectrum)
 
 
 class SpectralAlbedoLevel(bpy.types.PropertyGroup):
@@ -29,10 +30,9 @@ class SpectralMaterialSettings(bpy.types.PropertyGroup):
                                                 description="Albedo at higher densities (the first albedo is at 0)")
     albedo_index: bpy.props.IntProperty(name="Active Albedo Level", min=0)
     anisotropy: bpy.props.PointerProperty(type=SpectralAnisotropySpectrum)
-    phase: bpy.props.EnumProperty(name="Phase", description="Phase function",
-                                  items=[("hg", "Henyey–Greenstein", "Forward or backward scattering by the anisotropy g"),
-                                         ("rayleigh", "Rayleigh", "Scattering by particles much smaller than the wavelength")],
-                                  default="hg")
+    phase: bpy.props.EnumProperty(name="Phase", description="Phase function", default="hg", items=[
+        ("hg", "Henyey–Greenstein", "Forward or backward scattering by the anisotropy g"),
+        ("rayleigh", "Rayleigh", "Scattering by particles much smaller than the wavelength")])
     use_fluorescence: bpy.props.BoolProperty(name="Fluorescence",
                                              description="Absorb the excitation band and re-emit at longer wavelengths")
     excitation: bpy.props.PointerProperty(type=SpectralExcitationSpectrum)

@@ -19,15 +19,16 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
                                        default=DEFAULTS.max_depth, min=1, soft_max=1024)
     bands: bpy.props.IntProperty(name="Bands", description="Render the wavelength range in this many passes",
                                  default=DEFAULTS.bands, min=1, soft_max=64)
-    wavelength_sampling: bpy.props.EnumProperty(name="Wavelength Sampling", default=DEFAULTS.wavelength_sampling, items=[
+    wavelength_sampling: bpy.props.EnumProperty(
+        name="Wavelength Sampling", default=DEFAULTS.wavelength_sampling, items=[
         ("visible", "Visible", "Importance by the eye's sensitivity"),
         ("light", "Lights", "Importance by the lights' spectra"),
         ("uniform", "Uniform", "Every wavelength alike (380–700 nm)"),
         ("d65_rejection", "D65", "Importance by daylight (rejection sampling)"),
         ("uv", "UV", "Uniform and into the ultraviolet, for fluorescence")])
-    wavelengths_per_path: bpy.props.EnumProperty(name="Wavelengths per Path", default=str(DEFAULTS.wavelengths_per_path),
-                                                 items=[("1", "1", "One wavelength per path"),
-                                                        ("4", "4 (Hero)", "A hero wavelength and three rotated ones")])
+    wavelengths_per_path: bpy.props.EnumProperty(
+        name="Wavelengths per Path", default=str(DEFAULTS.wavelengths_per_path),
+        items=[("1", "1", "One wavelength per path"), ("4", "4 (Hero)", "A hero wavelength and three rotated ones")])
     lambda_min: bpy.props.FloatProperty(name="Min", description="Shortest rendered wavelength (nm)",
                                         default=DEFAULTS.lambda_min, min=LAMBDA_MIN, max=LAMBDA_MAX)
     lambda_max: bpy.props.FloatProperty(name="Max", description="Longest rendered wavelength (nm)",

@@ -149,5 +149,5 @@ class SpectralEmissionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     source: _source(("GAUSSIAN", "CURVE", "CSV"), "GAUSSIAN")
 
 
-CLASSES = (SpectralLightSpectrum, SpectralAlbedoSpectrum, SpectralExtinctionSpectrum, SpectralAnisotropySpectrum, SpectralExcitationSpectrum,
-           SpectralEmissionSpectrum)
+CLASSES = (SpectralLightSpectrum, SpectralAlbedoSpectrum, SpectralExtinctionSpectrum, SpectralAnisotropySpectrum,
+           SpectralExcitationSpectrum, SpectralEmissionSpectrum)

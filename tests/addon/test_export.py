@@ -167,7 +167,7 @@ def test_fluid_domain_without_a_cache_frame_is_reported(registered, tmp_path):
     add_sun()
     _fake_fluid_domain(tmp_path)
     bpy.context.scene.frame_set(5)
-    with pytest.raises(SpectralError, match=r"fluid domain 'Smoke Domain': no baked cache for frame 5: .*fluid_data_0005.vdb"):
+    with pytest.raises(SpectralError, match=r"'Smoke Domain': no baked cache for frame 5: .*fluid_data_0005.vdb"):
         _export()
 
 
@@ -221,7 +221,8 @@ def test_lights_and_world(registered, tmp_path):
     np.testing.assert_allclose(lights["Bulb"].position, [1.0, 2.0, 3.0])
     np.testing.assert_allclose(lights["Bulb"].spectrum.values, spectra.blackbody(2700.0).values)
     np.testing.assert_allclose(lights["Spot"].spot_direction, [0.0, 0.0, -1.0], atol=1e-6)
-    assert lights["Spot"].spot_size == pytest.approx(math.radians(30)) and lights["Spot"].spot_blend == pytest.approx(0.3)
+    assert lights["Spot"].spot_size == pytest.approx(math.radians(30))
+    assert lights["Spot"].spot_blend == pytest.approx(0.3)
     assert lights["Sky"].kind == "sky" and lights["Sky"].strength == 0.5 and lights["Sky"].horizon_spectrum is not None
 
 

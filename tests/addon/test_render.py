@@ -140,3 +140,18 @@ def test_cli_reports_bad_input_and_keeps_the_output(registered, tmp_path):
     missing = _run_cli("render", tmp_path / "nowhere.blend", "--out", out)
     assert missing.returncode == 1 and "nowhere.blend does not exist" in missing.stderr
     assert _run_cli("draw").returncode == 2
+
+
+def test_unreachable_scheduler_is_reported_and_writes_nothing(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    scene.render.engine = "SPECTRAL_VOLUME"
+    scene.spectral.scheduler_address = "tcp://127.0.0.1:9"  # the discard port: nothing listens there
+    output = tmp_path / "f12.exr"
+    output.write_bytes(b"previous render")
+    scene.render.filepath = str(output)
+    with pytest.raises(RuntimeError, match=r"cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+        bpy.ops.render.render(write_still=True)
+    assert output.read_bytes() == b"previous render"
+    with pytest.raises(RuntimeError, match="Render failed, nothing written: cannot reach the Dask scheduler"):
+        bpy.ops.spectral.render_image(image_name="Farm")
+    assert "Farm" not in bpy.data.images
