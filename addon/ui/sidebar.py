@@ -1,20 +1,66 @@
-"""The "Spectral" tab in the 3D viewport sidebar (N panel)."""
+"""The "Spectral" tab in the 3D viewport sidebar (N panel): the artist's main controls in one place."""
 
 import bpy
 
+from ..props.render import ENGINE_ID
+from .lighting import draw_light, draw_world
+from .material import draw_material_main
 
-class SPECTRAL_PT_sidebar(bpy.types.Panel):
-    bl_label = "Spectral Render"
-    bl_idname = "SPECTRAL_PT_sidebar"
+
+class SidebarPanel:
     bl_space_type = "VIEW_3D"
     bl_region_type = "UI"
     bl_category = "Spectral"
 
+
+class SPECTRAL_PT_sidebar(SidebarPanel, bpy.types.Panel):
+    bl_label = "Spectral Render"
+    bl_idname = "SPECTRAL_PT_sidebar"
+
     def draw(self, context):
-        settings = context.scene.spectral
+        scene = context.scene
         layout = self.layout
-        layout.prop(settings, "samples")
-        layout.prop(settings, "seed")
+        if scene.render.engine != ENGINE_ID:
+            layout.prop(scene.render, "engine")
+        layout.operator("spectral.render_image", text="Render", icon="RENDER_STILL")
+        layout.operator("spectral.export_scene", text="Export Scene", icon="EXPORT")
+        layout.prop(scene.spectral, "samples")
+        layout.prop(scene.spectral, "wavelength_sampling")
 
 
-CLASSES = (SPECTRAL_PT_sidebar,)
+class SPECTRAL_PT_sidebar_volume(SidebarPanel, bpy.types.Panel):
+    bl_label = "Volume"
+    bl_idname = "SPECTRAL_PT_sidebar_volume"
+    bl_parent_id = "SPECTRAL_PT_sidebar"
+
+    def draw(self, context):
+        obj = context.active_object
+        material = obj.active_material if obj is not None else None
+        if material is None:
+            self.layout.label(text="Select an object with a material", icon="INFO")
+            return
+        self.layout.label(text=material.name, icon="MATERIAL")
+        draw_material_main(self.layout, material)
+
+
+class SPECTRAL_PT_sidebar_lighting(SidebarPanel, bpy.types.Panel):
+    bl_label = "Lighting"
+    bl_idname = "SPECTRAL_PT_sidebar_lighting"
+    bl_parent_id = "SPECTRAL_PT_sidebar"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        obj = context.active_object
+        if obj is not None and obj.type == "LIGHT":
+            layout.label(text=obj.name, icon="LIGHT")
+            draw_light(layout, obj.data)
+        world = context.scene.world
+        if world is not None:
+            row = layout.row()
+            row.label(text=world.name, icon="WORLD")
+            row.prop(world.spectral, "enabled", text="")
+            draw_world(layout, world)
+
+
+CLASSES = (SPECTRAL_PT_sidebar, SPECTRAL_PT_sidebar_volume, SPECTRAL_PT_sidebar_lighting)

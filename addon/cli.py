@@ -1,0 +1,109 @@
+"""Headless rendering of a .blend file to a multilayer EXR.
+
+    python -m addon.cli render FILE.blend --out OUT.exr [--frame N] [--spp N] [--scheduler ADDRESS]
+    blender -c spectral_render FILE.blend --out OUT.exr [...]   (the same, with the extension installed)
+
+Blender command ids must be Python identifiers, hence `spectral_render`. Exit codes: 0 success,
+1 bad input (message on stderr, nothing written), 2 usage error, 130 interrupted.
+"""
+
+import argparse
+import sys
+from pathlib import Path
+
+from .tracer import image_io
+from .tracer.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK, ProgressBar
+from .tracer.errors import SpectralError
+
+COMMAND = "spectral_render"
+CLASSES = ()
+_handle = None
+
+
+def _parser(prog: str) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog=prog, description="Render a .blend file with the spectral volume tracer")
+    parser.add_argument("blend", type=Path, help=".blend file to render (its active scene)")
+    parser.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (XYZ, RGB, variance)")
+    parser.add_argument("--frame", type=int, help="frame to render (default: the file's current frame)")
+    parser.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
+    parser.add_argument("--scheduler", help="Dask scheduler tcp://HOST:PORT to render on (default: the scene's "
+                                            "Render setting; empty: this computer)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    return parser
+
+
+def render_blend(args) -> str:
+    """Open, export, render and write; returns a one-line summary. Raises SpectralError on bad input."""
+    import bpy
+
+    from . import dispatch
+    from .export.scene import export_scene
+
+    if not args.blend.is_file():
+        raise SpectralError(f"blend file {args.blend} does not exist")
+    if args.spp is not None and args.spp < 1:
+        raise SpectralError(f"--spp must be at least 1, got {args.spp}")
+    bpy.ops.wm.open_mainfile(filepath=str(args.blend), load_ui=False)
+    scene = bpy.context.scene
+    if args.frame is not None:
+        scene.frame_set(args.frame)
+    export = export_scene(bpy.context.evaluated_depsgraph_get())
+    for warning in export.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    scheduler = scene.spectral.scheduler_address if args.scheduler is None else args.scheduler
+    result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=None if args.quiet else ProgressBar())
+    film = result.film
+    image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
+    return (f"wrote {args.out} ({film.width}×{film.height}, frame {scene.frame_current}, "
+            f"{result.stats['samples_per_pixel']} spp, {result.seconds:.1f} s)")
+
+
+def main(argv=None, prog="python -m addon.cli render") -> int:
+    args = _parser(prog).parse_args(argv)
+    try:
+        print(render_blend(args))
+    except SpectralError as problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("\ninterrupted: nothing written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return EXIT_OK
+
+
+def _command(argv) -> int:
+    """`blender -c spectral_render ...`"""
+    try:
+        return main(argv, prog=f"blender -c {COMMAND}")
+    except SystemExit as exit_:  # argparse: --help or a usage error
+        return int(exit_.code or 0)
+
+
+def register_extras():
+    import bpy
+
+    global _handle
+    _handle = bpy.utils.register_cli_command(COMMAND, _command)
+
+
+def unregister_extras():
+    import bpy
+
+    global _handle
+    bpy.utils.unregister_cli_command(_handle)
+    _handle = None
+
+
+def _module_main(argv) -> int:
+    """`python -m addon.cli render ...`: registers the add-on in this bpy module first."""
+    if not argv or argv[0] != "render":
+        print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--frame N] [--spp N]", file=sys.stderr)
+        return 2
+    from . import register
+
+    register()
+    return main(argv[1:])
+
+
+if __name__ == "__main__":
+    raise SystemExit(_module_main(sys.argv[1:]))

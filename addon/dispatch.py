@@ -1,0 +1,19 @@
+"""Runs a tracer render on this computer, or on the Dask farm whose scheduler the Render settings name.
+
+Both give the same RenderResult (the distributed film is bit-identical, docs/distributed.md) and call
+`progress(film, fraction)` and `cancel()` alike, so the engine, Render to Image and the CLI show the
+cluster's progress and stop it the same way. Blender does not bundle Dask: a scheduler address in a
+Blender without it is reported as an error by the tracer, with what to install.
+"""
+
+from .tracer import render as local
+from .tracer.render import RenderResult
+from .tracer.scene import Scene
+
+
+def run(scene: Scene, scheduler: str = "", *, spp: int | None = None, progress=None, cancel=None) -> RenderResult:
+    if not scheduler:
+        return local.render(scene, spp=spp, progress=progress, cancel=cancel)
+    from .tracer import distributed
+
+    return distributed.render(scene, scheduler=scheduler, spp=spp, progress=progress, cancel=cancel)

@@ -1,0 +1,95 @@
+"""The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders.
+
+Each frame is exported from the render depsgraph and rendered, here or on the Dask farm of the Render
+settings' scheduler address, in passes of doubling sample counts;
+after every pass the Render Result is updated (Combined as linear Rec.709, plus the XYZ and
+XYZ Variance passes, which the compositor and multilayer EXR output see), progress is reported and
+Esc (`test_break`) stops the render between passes. Bad input is reported as an error and renders
+nothing, so Blender writes no output file.
+
+While it is the engine, Blender's generic panels (those offered for every engine: camera, volume file
+and grids, output, fluid physics, ...) stay visible, and the viewport's Material Preview uses EEVEE.
+"""
+
+import bpy
+
+from . import dispatch
+from .export.scene import export_scene
+from .pixels import blender_rows, with_alpha
+from .props.render import ENGINE_ID
+from .tracer.errors import SpectralError
+
+XYZ_PASS = "XYZ"
+VARIANCE_PASS = "XYZ Variance"
+
+
+class SpectralVolumeEngine(bpy.types.RenderEngine):
+    bl_idname = ENGINE_ID
+    bl_label = "Spectral Volume"
+    bl_use_preview = False
+    bl_use_eevee_viewport = True
+
+    def update_render_passes(self, scene=None, renderlayer=None):
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
+        self.register_pass(scene, renderlayer, XYZ_PASS, 3, "XYZ", "COLOR")
+        self.register_pass(scene, renderlayer, VARIANCE_PASS, 3, "XYZ", "COLOR")
+
+    def render(self, depsgraph):
+        try:
+            export = export_scene(depsgraph)
+        except SpectralError as problem:
+            self.report({"ERROR"}, str(problem))
+            return
+        for warning in export.warnings:
+            self.report({"WARNING"}, warning)
+        camera = export.scene.camera
+        if (camera.width, camera.height) != (self.resolution_x, self.resolution_y):
+            self.report({"ERROR"}, "render region (border) and crop are not supported: turn Render Region off")
+            return
+        result = self.begin_result(0, 0, camera.width, camera.height)
+        spp = export.scene.settings.spp
+
+        def progress(film, fraction):
+            self._write(result, film)
+            self.update_result(result)
+            self.update_progress(fraction)
+            self.update_stats("", f"Spectral Volume | {int(film.samples.min())}/{spp} samples")
+
+        try:
+            dispatch.run(export.scene, depsgraph.scene.original.spectral.scheduler_address, progress=progress,
+                         cancel=self.test_break)
+        except SpectralError as problem:
+            self.report({"ERROR"}, str(problem))
+        self.end_result(result)
+
+    @staticmethod
+    def _write(result, film) -> None:
+        passes = result.layers[0].passes
+        passes["Combined"].rect = blender_rows(with_alpha(film.rgb()))
+        passes[XYZ_PASS].rect = blender_rows(film.xyz)
+        passes[VARIANCE_PASS].rect = blender_rows(film.variance)
+
+
+CLASSES = (SpectralVolumeEngine,)
+GENERIC_ENGINE = "BLENDER_RENDER"  # Blender marks the panels that suit any engine with this name
+_panels_shown = []
+
+
+def _panel_classes(base=bpy.types.Panel):
+    for cls in base.__subclasses__():
+        yield cls
+        yield from _panel_classes(cls)
+
+
+def register_extras():
+    for panel in _panel_classes():
+        engines = getattr(panel, "COMPAT_ENGINES", None)
+        if isinstance(engines, set) and GENERIC_ENGINE in engines and ENGINE_ID not in engines:
+            engines.add(ENGINE_ID)
+            _panels_shown.append(panel)
+
+
+def unregister_extras():
+    for panel in _panels_shown:
+        panel.COMPAT_ENGINES.discard(ENGINE_ID)
+    _panels_shown.clear()

@@ -1,0 +1,1 @@
+"""Export: the Blender scene as a tracer Scene (addon.tracer.scene), a pure data transformation."""

@@ -1,0 +1,58 @@
+"""Blender lights and World → tracer lights.
+
+Brightness is Blender's own, converted so that the same light looks the same in Cycles:
+- Sun: Strength is irradiance in W/m²; our sun's strength is its irradiance Y, so it is copied.
+  Blender's sun shines along the object's −Z; our `direction` points towards the sun: the object's +Z.
+- Point and spot: Power P in W radiates P / (4π) W/sr in every direction (Cycles: a spot is a point
+  light masked to its cone, it does not concentrate its power), so our intensity Y = P / (4π).
+The spectrum replaces the light's colour. Area lights are not supported (skipped with a warning).
+The World becomes a uniform environment or a sky of luminance `strength`.
+"""
+
+import math
+
+import numpy as np
+
+from ..tracer.scene import Light
+from .spectra import to_spectrum
+
+SUPPORTED = ("SUN", "POINT", "SPOT")
+
+
+def point_intensity(power_watts: float) -> float:
+    """Blender point/spot Power (W) → our intensity Y (per steradian)."""
+    return power_watts / (4.0 * math.pi)
+
+
+def _axis(matrix_world, column: int) -> np.ndarray:
+    axis = np.array(matrix_world.col[column][:3], dtype=np.float64)
+    return axis / np.linalg.norm(axis)
+
+
+def export_light(obj) -> Light | None:
+    """The tracer light of a light object, or None for unsupported types (area lights)."""
+    light = obj.data.original
+    if light.type not in SUPPORTED:
+        return None
+    spectrum = to_spectrum(light.spectral.spectrum)
+    matrix = obj.matrix_world
+    if light.type == "SUN":
+        return Light(kind="sun", spectrum=spectrum, strength=light.energy, direction=_axis(matrix, 2),
+                     angle=light.angle, name=obj.name)
+    position = np.array(matrix.translation, dtype=np.float64)
+    strength = point_intensity(light.energy)
+    if light.type == "POINT":
+        return Light(kind="point", spectrum=spectrum, strength=strength, position=position, name=obj.name)
+    return Light(kind="spot", spectrum=spectrum, strength=strength, position=position,
+                 spot_direction=-_axis(matrix, 2), spot_size=light.spot_size, spot_blend=light.spot_blend,
+                 name=obj.name)
+
+
+def export_world(world) -> Light | None:
+    if world is None or not world.original.spectral.enabled:
+        return None
+    world = world.original
+    settings = world.spectral
+    horizon = to_spectrum(settings.horizon) if settings.kind == "sky" else None
+    return Light(kind=settings.kind, spectrum=to_spectrum(settings.spectrum), strength=settings.strength,
+                 horizon_spectrum=horizon, name=world.name)

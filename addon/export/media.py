@@ -1,0 +1,59 @@
+"""Volume material settings + grids → tracer Medium."""
+
+import numpy as np
+
+from ..tracer.errors import SpectralError
+from ..tracer.scene import BlackbodyEmission, Fluorescence, Grid, Medium
+from .spectra import to_spectrum
+
+
+def spectral_material(obj):
+    """The first material of `obj` with Spectral Volume enabled, or None. Settings are read from the
+    original (not the evaluated) data: Python property edits do not tag evaluated copies for update."""
+    for slot in obj.material_slots:
+        if slot.material is not None and slot.material.original.spectral.enabled:
+            return slot.material.original
+    return None
+
+
+def require_material(obj):
+    material = spectral_material(obj)
+    if material is None:
+        names = [slot.material.name for slot in obj.material_slots if slot.material is not None]
+        found = f"its materials ({', '.join(names)}) are not spectral" if names else "it has no material"
+        raise SpectralError(f"object {obj.name!r} is a volume but {found}: add a material and enable "
+                            "Spectral Volume in it (Material Properties or the Spectral sidebar tab)")
+    return material
+
+
+def albedo_table(settings) -> tuple[np.ndarray, np.ndarray]:
+    """(densities, rows) from the base albedo at density 0 and the extra levels."""
+    levels = [(0.0, settings.albedo)] + [(level.density, level.spectrum) for level in settings.albedo_levels]
+    levels.sort(key=lambda level: level[0])
+    densities = np.array([density for density, _spectrum in levels])
+    if np.any(np.diff(densities) <= 0):
+        raise SpectralError(f"material {settings.id_data.name!r}: albedo levels need different densities above 0, "
+                            f"found {sorted(densities.tolist())}")
+    return densities, np.stack([to_spectrum(spectrum).values for _density, spectrum in levels])
+
+
+def export_medium(name: str, material, density: Grid, temperature: Grid | None) -> Medium:
+    """The medium of `material` over `density`; `temperature` is required when blackbody emission is on."""
+    settings = material.spectral
+    densities, table = albedo_table(settings)
+    fluorescence = None
+    if settings.use_fluorescence:
+        fluorescence = Fluorescence(excitation=to_spectrum(settings.excitation),
+                                    emission=to_spectrum(settings.emission), quantum_yield=settings.quantum_yield)
+    emission = None
+    if settings.use_blackbody:
+        if temperature is None:
+            raise SpectralError(f"object {name!r}: material {material.name!r} glows by temperature, but the object "
+                                "has no temperature grid (only Volume objects and fluid domains have one)")
+        emission = BlackbodyEmission(temperature=temperature, intensity=settings.blackbody_intensity,
+                                     temperature_scale=settings.temperature_scale,
+                                     temperature_offset=settings.temperature_offset)
+    return Medium(name=name, density=density, density_scale=settings.density_scale,
+                  extinction=to_spectrum(settings.extinction), albedo_densities=densities, albedo_table=table,
+                  anisotropy=to_spectrum(settings.anisotropy), phase=settings.phase, fluorescence=fluorescence,
+                  emission=emission)

@@ -1,0 +1,92 @@
+"""Operators that apply a light-spectrum or material preset, and add or remove albedo levels."""
+
+import bpy
+
+from .. import curves, presets
+from .targets import TargetProperties, resolve
+
+
+def _items(table):
+    return [(key, label, f"Apply the {label} preset") for key, (label, _values) in table.items()]
+
+
+class SPECTRAL_OT_apply_light_preset(TargetProperties, bpy.types.Operator):
+    """Set this light spectrum from a preset"""
+
+    bl_idname = "spectral.apply_light_preset"
+    bl_label = "Apply Light Preset"
+    bl_options = {"REGISTER", "UNDO"}
+
+    preset: bpy.props.EnumProperty(name="Preset", items=_items(presets.LIGHT_PRESETS))
+
+    def execute(self, context):
+        settings = resolve(self)
+        if settings is None:
+            self.report({"ERROR"}, "The light spectrum no longer exists")
+            return {"CANCELLED"}
+        presets.apply(settings, presets.LIGHT_PRESETS[self.preset][1])
+        return {"FINISHED"}
+
+
+class SPECTRAL_OT_apply_material_preset(bpy.types.Operator):
+    """Set the active material's spectral volume settings from a preset"""
+
+    bl_idname = "spectral.apply_material_preset"
+    bl_label = "Apply Material Preset"
+    bl_options = {"REGISTER", "UNDO"}
+
+    preset: bpy.props.EnumProperty(name="Preset", items=_items(presets.MATERIAL_PRESETS))
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context, "material", None) is not None
+
+    def execute(self, context):
+        settings = context.material.spectral
+        presets.apply(settings, presets.MATERIAL_PRESETS[self.preset][1])
+        settings.enabled = True
+        return {"FINISHED"}
+
+
+class SPECTRAL_OT_albedo_level_add(bpy.types.Operator):
+    """Add an albedo spectrum at a higher density"""
+
+    bl_idname = "spectral.albedo_level_add"
+    bl_label = "Add Albedo Level"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context, "material", None) is not None
+
+    def execute(self, context):
+        settings = context.material.spectral
+        highest = max((level.density for level in settings.albedo_levels), default=0.0)
+        level = settings.albedo_levels.add()
+        level.density = highest + 1.0
+        settings.albedo_index = len(settings.albedo_levels) - 1
+        return {"FINISHED"}
+
+
+class SPECTRAL_OT_albedo_level_remove(bpy.types.Operator):
+    """Remove the active albedo level"""
+
+    bl_idname = "spectral.albedo_level_remove"
+    bl_label = "Remove Albedo Level"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        material = getattr(context, "material", None)
+        return material is not None and len(material.spectral.albedo_levels) > 0
+
+    def execute(self, context):
+        settings = context.material.spectral
+        curves.discard(settings.albedo_levels[settings.albedo_index].spectrum.curve)
+        settings.albedo_levels.remove(settings.albedo_index)
+        settings.albedo_index = max(0, min(settings.albedo_index, len(settings.albedo_levels) - 1))
+        return {"FINISHED"}
+
+
+CLASSES = (SPECTRAL_OT_apply_light_preset, SPECTRAL_OT_apply_material_preset, SPECTRAL_OT_albedo_level_add,
+           SPECTRAL_OT_albedo_level_remove)

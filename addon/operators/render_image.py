@@ -1,0 +1,90 @@
+"""The "Render to Image" operator: renders the scene into a float Image (and optionally a multilayer
+EXR) without the Render window.
+
+Run from the UI (invoke) it renders on a background thread, shows progress and stops on Esc; run
+from a script (execute) it renders in place. Only a finished render writes anything: a cancelled or
+failed one leaves the image and the file as they were.
+"""
+
+import bpy
+
+from ..export.scene import export_scene
+from ..image_output import write_outputs
+from ..render_job import RenderJob
+from ..tracer.errors import SpectralError
+
+TIMER_SECONDS = 0.25
+
+
+class SPECTRAL_OT_render_image(bpy.types.Operator):
+    """Render spectrally into an image (Esc cancels)"""
+
+    bl_idname = "spectral.render_image"
+    bl_label = "Render to Image"
+
+    image_name: bpy.props.StringProperty(name="Image", default="Spectral Render",
+                                         description="Float image to render into (created when missing)")
+    exr_path: bpy.props.StringProperty(name="EXR File", subtype="FILE_PATH",
+                                       description="Also write a multilayer EXR (XYZ, RGB, variance); empty: none")
+
+    _job = None
+    _timer = None
+
+    def _start(self, context) -> RenderJob | None:
+        try:
+            export = export_scene(context.evaluated_depsgraph_get())
+        except SpectralError as problem:
+            self.report({"ERROR"}, f"Nothing rendered: {problem}")
+            return None
+        for warning in export.warnings:
+            self.report({"WARNING"}, warning)
+        return RenderJob(export.scene, context.scene.spectral.scheduler_address)
+
+    def _finish(self, job: RenderJob) -> set:
+        if job.error is not None:
+            self.report({"ERROR"}, f"Render failed, nothing written: {job.error}")
+            return {"CANCELLED"}
+        if not job.succeeded:
+            self.report({"WARNING"}, "Render cancelled, nothing written")
+            return {"CANCELLED"}
+        try:
+            image = write_outputs(job.result.film, self.image_name, self.exr_path)
+        except SpectralError as problem:
+            self.report({"ERROR"}, f"Render not saved: {problem}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Rendered into image {image.name!r} in {job.result.seconds:.1f} s")
+        return {"FINISHED"}
+
+    def execute(self, context):
+        job = self._start(context)
+        if job is None:
+            return {"CANCELLED"}
+        job.run()
+        return self._finish(job)
+
+    def invoke(self, context, event):
+        job = self._start(context)
+        if job is None:
+            return {"CANCELLED"}
+        self._job = job
+        job.start()
+        manager = context.window_manager
+        self._timer = manager.event_timer_add(TIMER_SECONDS, window=context.window)
+        manager.progress_begin(0.0, 1.0)
+        manager.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._job.cancel()
+        elif event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        context.window_manager.progress_update(self._job.fraction)
+        if self._job.running:
+            return {"RUNNING_MODAL"}
+        context.window_manager.event_timer_remove(self._timer)
+        context.window_manager.progress_end()
+        return self._finish(self._job)
+
+
+CLASSES = (SPECTRAL_OT_render_image,)

@@ -1,0 +1,15 @@
+"""Tracer film → Blender pixel buffers: rows flipped (Blender stores the bottom row first), flattened
+per pixel, float32 for `foreach_set` and render passes."""
+
+import numpy as np
+
+
+def blender_rows(image: np.ndarray) -> np.ndarray:
+    """(height, width, channels), top row first → (height · width, channels), bottom row first, float32."""
+    height, width, channels = image.shape
+    return np.ascontiguousarray(image[::-1].reshape(height * width, channels), dtype=np.float32)
+
+
+def with_alpha(rgb: np.ndarray) -> np.ndarray:
+    """RGB → RGBA with alpha 1 (a volume render covers the whole frame, its background included)."""
+    return np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=2)

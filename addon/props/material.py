@@ -1,0 +1,56 @@
+"""Volume material settings: what a material means to the spectral tracer.
+
+Stored on the Material (`material.spectral`), used by every object the material is on: Volume
+objects, fluid domains and meshes (voxelised). Mirrors the tracer's `Medium`: extinction, an albedo
+table over density levels, anisotropy, phase function, fluorescence and blackbody emission.
+"""
+
+import bpy
+
+from .spectrum import (SpectralAlbedoSpectrum, SpectralAnisotropySpectrum, SpectralEmissionSpectrum,
+                       SpectralExcitationSpectrum, SpectralExtinctionSpectrum)
+
+
+class SpectralAlbedoLevel(bpy.types.PropertyGroup):
+    """The albedo spectrum at one density level above 0; between levels the albedo is interpolated."""
+
+    density: bpy.props.FloatProperty(name="Density", description="Grid density (before Density Scale) of this level",
+                                     default=1.0, min=0.0, soft_max=10.0)
+    spectrum: bpy.props.PointerProperty(type=SpectralAlbedoSpectrum)
+
+
+class SpectralMaterialSettings(bpy.types.PropertyGroup):
+    enabled: bpy.props.BoolProperty(name="Spectral Volume", description="Render this material's volume spectrally",
+                                    default=False)
+    density_scale: bpy.props.FloatProperty(name="Density Scale", description="Multiplies the density grid",
+                                           default=1.0, min=1e-6, soft_max=100.0)
+    extinction: bpy.props.PointerProperty(type=SpectralExtinctionSpectrum)
+    albedo: bpy.props.PointerProperty(type=SpectralAlbedoSpectrum)
+    albedo_levels: bpy.props.CollectionProperty(type=SpectralAlbedoLevel,
+                                                description="Albedo at higher densities (the first albedo is at 0)")
+    albedo_index: bpy.props.IntProperty(name="Active Albedo Level", min=0)
+    anisotropy: bpy.props.PointerProperty(type=SpectralAnisotropySpectrum)
+    phase: bpy.props.EnumProperty(name="Phase", description="Phase function", default="hg", items=[
+        ("hg", "Henyey–Greenstein", "Forward or backward scattering by the anisotropy g"),
+        ("rayleigh", "Rayleigh", "Scattering by particles much smaller than the wavelength")])
+    use_fluorescence: bpy.props.BoolProperty(name="Fluorescence",
+                                             description="Absorb the excitation band and re-emit at longer wavelengths")
+    excitation: bpy.props.PointerProperty(type=SpectralExcitationSpectrum)
+    emission: bpy.props.PointerProperty(type=SpectralEmissionSpectrum)
+    quantum_yield: bpy.props.FloatProperty(name="Quantum Yield", description="Fraction of absorbed light re-emitted",
+                                           default=0.9, min=0.0, max=1.0, subtype="FACTOR")
+    use_blackbody: bpy.props.BoolProperty(name="Blackbody Emission", description="Glow by the temperature grid (fire)")
+    temperature_grid: bpy.props.StringProperty(name="Temperature Grid", default="temperature",
+                                               description="Grid holding the temperature (fluid domains: "
+                                                           "'temperature' falls back to 'heat', or use 'flame')")
+    blackbody_intensity: bpy.props.FloatProperty(name="Intensity", description="Brightness of the glow",
+                                                 default=1.0, min=0.0, soft_max=100.0)
+    temperature_scale: bpy.props.FloatProperty(name="Temperature Scale", default=1.0, soft_min=0.0, soft_max=10000.0,
+                                               description="Kelvin per grid unit")
+    temperature_offset: bpy.props.FloatProperty(name="Temperature Offset", default=0.0, soft_min=0.0,
+                                                soft_max=10000.0, description="Kelvin added after scaling")
+    curve_group: bpy.props.PointerProperty(type=bpy.types.NodeTree, name="Curves",
+                                           description="Hidden node group holding this material's spectral curves")
+
+
+CLASSES = (SpectralAlbedoLevel, SpectralMaterialSettings)

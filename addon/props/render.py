@@ -1,0 +1,56 @@
+"""Render settings (per Scene) and per-object volume settings."""
+
+import bpy
+
+from ..tracer.scene import RenderSettings
+from ..tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
+
+DEFAULTS = RenderSettings()
+ENGINE_ID = "SPECTRAL_VOLUME"  # the render engine's bl_idname; its panels show while it is the engine
+
+
+class SpectralRenderSettings(bpy.types.PropertyGroup):
+    """Per-scene render settings of the spectral tracer (mirrors addon.tracer.scene.RenderSettings)."""
+
+    samples: bpy.props.IntProperty(name="Samples", description="Paths per pixel", default=64, min=1, soft_max=4096)
+    seed: bpy.props.IntProperty(name="Seed", description="Random seed: the same seed gives the same image",
+                                default=DEFAULTS.seed, min=0)
+    max_bounces: bpy.props.IntProperty(name="Max Bounces", description="Most scattering events along a path",
+                                       default=DEFAULTS.max_depth, min=1, soft_max=1024)
+    bands: bpy.props.IntProperty(name="Bands", description="Render the wavelength range in this many passes",
+                                 default=DEFAULTS.bands, min=1, soft_max=64)
+    wavelength_sampling: bpy.props.EnumProperty(
+        name="Wavelength Sampling", default=DEFAULTS.wavelength_sampling, items=[
+        ("visible", "Visible", "Importance by the eye's sensitivity"),
+        ("light", "Lights", "Importance by the lights' spectra"),
+        ("uniform", "Uniform", "Every wavelength alike (380–700 nm)"),
+        ("d65_rejection", "D65", "Importance by daylight (rejection sampling)"),
+        ("uv", "UV", "Uniform and into the ultraviolet, for fluorescence")])
+    wavelengths_per_path: bpy.props.EnumProperty(
+        name="Wavelengths per Path", default=str(DEFAULTS.wavelengths_per_path),
+        items=[("1", "1", "One wavelength per path"), ("4", "4 (Hero)", "A hero wavelength and three rotated ones")])
+    lambda_min: bpy.props.FloatProperty(name="Min", description="Shortest rendered wavelength (nm)",
+                                        default=DEFAULTS.lambda_min, min=LAMBDA_MIN, max=LAMBDA_MAX)
+    lambda_max: bpy.props.FloatProperty(name="Max", description="Longest rendered wavelength (nm)",
+                                        default=DEFAULTS.lambda_max, min=LAMBDA_MIN, max=LAMBDA_MAX)
+    cmf: bpy.props.EnumProperty(name="Colour Matching", default=DEFAULTS.cmf, items=[
+        ("cie1931", "CIE 1931", "The exact CIE 1931 2° observer tables"),
+        ("wyman1", "Wyman (single lobe)", "Wyman–Sloan–Shirley single-lobe fit"),
+        ("wyman3", "Wyman (multi-lobe)", "Wyman–Sloan–Shirley multi-lobe fit")])
+    backend: bpy.props.EnumProperty(name="Backend", default=DEFAULTS.backend, items=[
+        ("numba", "Numba", "Compiled kernel (fast)"),
+        ("numpy", "NumPy", "Reference kernel without a compiler")])
+    scheduler_address: bpy.props.StringProperty(
+        name="Scheduler", description="Dask scheduler to render on (tcp://host:port); empty: this computer")
+
+
+class SpectralObjectSettings(bpy.types.PropertyGroup):
+    """How an object becomes a medium: the density grid to read, or the voxel size for meshes."""
+
+    density_grid: bpy.props.StringProperty(name="Density Grid", default="density",
+                                           description="Grid of the VDB file (or fluid cache) used as density")
+    voxel_size: bpy.props.FloatProperty(name="Voxel Size", description="Voxel size when a mesh is voxelised",
+                                        default=0.05, min=1e-4, soft_max=1.0, subtype="DISTANCE", unit="LENGTH")
+
+
+CLASSES = (SpectralRenderSettings, SpectralObjectSettings)

@@ -1,0 +1,63 @@
+"""Light and World panels (Properties editor ▸ Light data, World) and the drawing the sidebar shares."""
+
+import bpy
+
+from ..props.render import ENGINE_ID
+from .spectrum import draw_spectrum
+
+SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT")
+
+
+def draw_light(layout, light) -> None:
+    if light.type not in SUPPORTED_LIGHTS:
+        layout.label(text=f"{light.type.title()} lights are not rendered spectrally (sun, point, spot are)",
+                     icon="ERROR")
+        return
+    layout.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
+    draw_spectrum(layout, light.spectral.spectrum, "Spectrum", presets=True)
+
+
+def draw_world(layout, world) -> None:
+    settings = world.spectral
+    layout.active = settings.enabled
+    layout.prop(settings, "kind")
+    layout.prop(settings, "strength")
+    draw_spectrum(layout, settings.spectrum, "Zenith" if settings.kind == "sky" else "Spectrum", presets=True)
+    if settings.kind == "sky":
+        draw_spectrum(layout, settings.horizon, "Horizon", presets=True)
+
+
+class SPECTRAL_PT_light(bpy.types.Panel):
+    bl_label = "Spectral Light"
+    bl_idname = "SPECTRAL_PT_light"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "data"
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine == ENGINE_ID and getattr(context, "light", None) is not None
+
+    def draw(self, context):
+        draw_light(self.layout, context.light)
+
+
+class SPECTRAL_PT_world(bpy.types.Panel):
+    bl_label = "Spectral World"
+    bl_idname = "SPECTRAL_PT_world"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "world"
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine == ENGINE_ID and getattr(context, "world", None) is not None
+
+    def draw_header(self, context):
+        self.layout.prop(context.world.spectral, "enabled", text="")
+
+    def draw(self, context):
+        draw_world(self.layout, context.world)
+
+
+CLASSES = (SPECTRAL_PT_light, SPECTRAL_PT_world)

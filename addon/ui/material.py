@@ -1,0 +1,118 @@
+"""Volume material panels (Properties editor ▸ Material) and the drawing the sidebar shares."""
+
+import bpy
+
+from ..props.render import ENGINE_ID
+from .spectrum import draw_spectrum
+
+
+def draw_material_main(layout, material) -> None:
+    """Density scale, phase, extinction and base albedo: the controls an artist reaches for first."""
+    settings = material.spectral
+    row = layout.row(align=True)
+    row.prop(settings, "enabled")
+    row.menu("SPECTRAL_MT_material_presets", text="Presets", icon="PRESET")
+    body = layout.column()
+    body.active = settings.enabled
+    body.prop(settings, "density_scale")
+    body.prop(settings, "phase")
+    if settings.phase == "hg":
+        draw_spectrum(body, settings.anisotropy, "Anisotropy")
+    draw_spectrum(body, settings.extinction, "Extinction")
+    draw_spectrum(body, settings.albedo, "Albedo")
+
+
+def draw_albedo_levels(layout, material) -> None:
+    settings = material.spectral
+    row = layout.row()
+    row.template_list("SPECTRAL_UL_albedo_levels", "", settings, "albedo_levels", settings, "albedo_index", rows=2)
+    buttons = row.column(align=True)
+    buttons.operator("spectral.albedo_level_add", text="", icon="ADD")
+    buttons.operator("spectral.albedo_level_remove", text="", icon="REMOVE")
+    if 0 <= settings.albedo_index < len(settings.albedo_levels):
+        level = settings.albedo_levels[settings.albedo_index]
+        layout.prop(level, "density")
+        draw_spectrum(layout, level.spectrum, "Albedo at this density")
+
+
+def draw_fluorescence(layout, material) -> None:
+    settings = material.spectral
+    layout.active = settings.use_fluorescence
+    draw_spectrum(layout, settings.excitation, "Excitation")
+    draw_spectrum(layout, settings.emission, "Emission")
+    layout.prop(settings, "quantum_yield")
+
+
+def draw_blackbody(layout, material) -> None:
+    settings = material.spectral
+    layout.active = settings.use_blackbody
+    layout.prop(settings, "temperature_grid")
+    layout.prop(settings, "blackbody_intensity")
+    row = layout.row(align=True)
+    row.prop(settings, "temperature_scale", text="Scale")
+    row.prop(settings, "temperature_offset", text="Offset")
+
+
+class SPECTRAL_UL_albedo_levels(bpy.types.UIList):
+    def draw_item(self, context, layout, data, item, icon, active_data, active_property, index=0, flt_flag=0):
+        row = layout.row(align=True)
+        row.prop(item.spectrum, "preview", text="")
+        row.prop(item, "density", emboss=False)
+
+
+class MaterialPanel:
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine == ENGINE_ID and getattr(context, "material", None) is not None
+
+
+class SPECTRAL_PT_material(MaterialPanel, bpy.types.Panel):
+    bl_label = "Spectral Volume"
+    bl_idname = "SPECTRAL_PT_material"
+
+    def draw(self, context):
+        draw_material_main(self.layout, context.material)
+
+
+class SPECTRAL_PT_material_albedo(MaterialPanel, bpy.types.Panel):
+    bl_label = "Albedo by Density"
+    bl_idname = "SPECTRAL_PT_material_albedo"
+    bl_parent_id = "SPECTRAL_PT_material"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        draw_albedo_levels(self.layout, context.material)
+
+
+class SPECTRAL_PT_material_fluorescence(MaterialPanel, bpy.types.Panel):
+    bl_label = "Fluorescence"
+    bl_idname = "SPECTRAL_PT_material_fluorescence"
+    bl_parent_id = "SPECTRAL_PT_material"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw_header(self, context):
+        self.layout.prop(context.material.spectral, "use_fluorescence", text="")
+
+    def draw(self, context):
+        draw_fluorescence(self.layout, context.material)
+
+
+class SPECTRAL_PT_material_blackbody(MaterialPanel, bpy.types.Panel):
+    bl_label = "Blackbody Emission"
+    bl_idname = "SPECTRAL_PT_material_blackbody"
+    bl_parent_id = "SPECTRAL_PT_material"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw_header(self, context):
+        self.layout.prop(context.material.spectral, "use_blackbody", text="")
+
+    def draw(self, context):
+        draw_blackbody(self.layout, context.material)
+
+
+CLASSES = (SPECTRAL_UL_albedo_levels, SPECTRAL_PT_material, SPECTRAL_PT_material_albedo,
+           SPECTRAL_PT_material_fluorescence, SPECTRAL_PT_material_blackbody)

@@ -1,0 +1,91 @@
+"""Render settings (Properties editor ▸ Render) and per-object volume settings (▸ Object)."""
+
+import bpy
+
+from ..export.fluids import fluid_domain
+from ..props.render import ENGINE_ID
+
+
+def draw_render_main(layout, scene) -> None:
+    settings = scene.spectral
+    layout.prop(settings, "samples")
+    layout.prop(settings, "max_bounces")
+    layout.prop(settings, "seed")
+
+
+def draw_wavelengths(layout, scene) -> None:
+    settings = scene.spectral
+    layout.prop(settings, "wavelength_sampling")
+    layout.prop(settings, "wavelengths_per_path")
+    row = layout.row(align=True)
+    row.prop(settings, "lambda_min")
+    row.prop(settings, "lambda_max")
+    layout.prop(settings, "bands")
+    layout.prop(settings, "cmf")
+
+
+def draw_object(layout, obj) -> None:
+    settings = obj.spectral
+    domain = obj.type == "MESH" and fluid_domain(obj) is not None
+    if obj.type == "VOLUME" or domain:
+        layout.prop(settings, "density_grid")
+    if obj.type == "MESH" and not domain:
+        layout.prop(settings, "voxel_size")
+
+
+class RenderPanel:
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine == ENGINE_ID
+
+
+class SPECTRAL_PT_render(RenderPanel, bpy.types.Panel):
+    bl_label = "Spectral Sampling"
+    bl_idname = "SPECTRAL_PT_render"
+
+    def draw(self, context):
+        draw_render_main(self.layout, context.scene)
+
+
+class SPECTRAL_PT_render_wavelengths(RenderPanel, bpy.types.Panel):
+    bl_label = "Wavelengths"
+    bl_idname = "SPECTRAL_PT_render_wavelengths"
+    bl_parent_id = "SPECTRAL_PT_render"
+
+    def draw(self, context):
+        draw_wavelengths(self.layout, context.scene)
+
+
+class SPECTRAL_PT_render_performance(RenderPanel, bpy.types.Panel):
+    bl_label = "Performance"
+    bl_idname = "SPECTRAL_PT_render_performance"
+    bl_parent_id = "SPECTRAL_PT_render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        settings = context.scene.spectral
+        self.layout.prop(settings, "backend")
+        self.layout.prop(settings, "scheduler_address")
+
+
+class SPECTRAL_PT_object(bpy.types.Panel):
+    bl_label = "Spectral Volume"
+    bl_idname = "SPECTRAL_PT_object"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+
+    @classmethod
+    def poll(cls, context):
+        obj = getattr(context, "object", None)
+        return context.engine == ENGINE_ID and obj is not None and obj.type in ("VOLUME", "MESH")
+
+    def draw(self, context):
+        draw_object(self.layout, context.object)
+
+
+CLASSES = (SPECTRAL_PT_render, SPECTRAL_PT_render_wavelengths, SPECTRAL_PT_render_performance, SPECTRAL_PT_object)

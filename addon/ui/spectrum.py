@@ -1,0 +1,82 @@
+"""Drawing one spectrum setting: source, its parameters, curve widget, swatch and problems."""
+
+from .. import curves
+from ..export.spectra import to_spectrum
+from ..operators.targets import point_at
+from ..tracer.errors import SpectralError
+
+LIGHT_PRESETS_MENU = "SPECTRAL_MT_light_presets"
+
+
+def draw_spectrum(layout, settings, text: str, presets: bool = False) -> None:
+    """Draw `settings` (a spectrum PropertyGroup) under the heading `text`."""
+    column = layout.column()
+    header = column.row(align=True)
+    header.label(text=text)
+    if settings.ROLE:
+        header.prop(settings, "preview", text="")
+    header.prop(settings, "source", text="")
+    if presets:
+        header.context_pointer_set("spectral_spectrum", settings)
+        header.menu(LIGHT_PRESETS_MENU, text="", icon="PRESET")
+    _draw_source(column, settings)
+    if settings.source != "CURVE":
+        point_at(column.operator("spectral.spectrum_to_curve", icon="FCURVE"), settings)
+    if hasattr(settings, "use_window"):
+        row = column.row(align=True)
+        row.prop(settings, "use_window", text="Window")
+        sub = row.row(align=True)
+        sub.active = settings.use_window
+        sub.prop(settings, "window_min")
+        sub.prop(settings, "window_max")
+    try:
+        to_spectrum(settings)
+    except SpectralError as problem:
+        column.label(text=str(problem), icon="ERROR")
+
+
+def _draw_source(column, settings) -> None:
+    source = settings.source
+    if source == "CONSTANT":
+        column.prop(settings, "value")
+    elif source == "ILLUMINANT":
+        column.prop(settings, "illuminant")
+    elif source == "BLACKBODY":
+        column.prop(settings, "temperature")
+    elif source == "BAND":
+        column.prop(settings, "band")
+    elif source == "GAUSSIAN":
+        row = column.row(align=True)
+        row.prop(settings, "peak")
+        row.prop(settings, "width")
+    elif source == "COLOR":
+        row = column.row(align=True)
+        row.prop(settings, "color", text="")
+        row.prop(settings, "rgb_method", text="")
+    elif source == "CURVE":
+        _draw_curve(column, settings)
+    elif source == "CSV":
+        row = column.row(align=True)
+        row.prop(settings, "filepath", text="")
+        point_at(row.operator("spectral.import_spectrum_csv", text="", icon="FILEBROWSER"), settings)
+        column.prop(settings, "units")
+    if source in ("BAND", "GAUSSIAN") and hasattr(settings, "value"):
+        column.prop(settings, "value")
+
+
+def _draw_curve(column, settings) -> None:
+    node = curves.find_node(settings.curve)
+    if node is None:
+        column.label(text="The curve is missing", icon="ERROR")
+        return
+    if curves.is_shared(settings.id_data):
+        row = column.row()
+        row.label(text="Curves shared with a copy", icon="ERROR")
+        point_at(row.operator("spectral.curves_single_user", text="Make Single-User"), settings)
+    column.template_curve_mapping(node, "mapping")
+    selected = curves.selected_points(node.mapping)
+    if len(selected) == 1:
+        (nm, value), = selected
+        column.label(text=f"Selected: {nm:.1f} nm → {value:.3g}   (x = nm ÷ {curves.NM_PER_X:g})")
+    else:
+        column.label(text=f"x: wavelength ÷ {curves.NM_PER_X:g} nm (5.5 = 550 nm)")

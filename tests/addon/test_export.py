@@ -1,0 +1,281 @@
+"""Export: Blender scene → tracer Scene (grids, transforms, spectra, camera, lights) and its errors."""
+
+import math
+
+import numpy as np
+import pytest
+
+from addon.export import camera as camera_export
+from addon.export.fluids import base_resolution
+from addon.export.lights import point_intensity
+from addon.export.scene import export_scene
+from addon.tracer import grids, spectra
+from addon.tracer.errors import SpectralError
+from addon.tracer.scene import Grid
+from addon.tracer.scene_io import load_scene
+from tests.addon.builders import (PATTERN, add_camera, add_sun, basic_scene, link, spectral_material,
+                                  vdb_index_to_world, write_vdb)
+
+bpy = pytest.importorskip("bpy")
+
+
+def _export():
+    return export_scene(bpy.context.evaluated_depsgraph_get())
+
+
+def test_vdb_volume_grid_transform_and_spectra(registered, tmp_path):
+    scene, cloud = basic_scene(tmp_path)
+    cloud.location = (1.0, 2.0, 3.0)
+    cloud.rotation_euler = (0.0, 0.0, math.radians(90))
+    cloud.scale = (2.0, 2.0, 2.0)
+    settings = cloud.material_slots[0].material.spectral
+    settings.albedo.source = "COLOR"
+    settings.albedo.color = (0.9, 0.5, 0.2)
+    level = settings.albedo_levels.add()
+    level.density = 0.5
+    level.spectrum.value = 0.3
+    settings.anisotropy.value = 0.4
+    (medium,) = _export().scene.media
+    np.testing.assert_array_equal(medium.density.values, PATTERN)
+    expected = np.array(cloud.matrix_world) @ vdb_index_to_world()
+    np.testing.assert_allclose(medium.density.index_to_world, expected, atol=1e-6)
+    assert medium.name == "Cloud" and medium.density_scale == 4.0
+    np.testing.assert_allclose(medium.albedo_densities, [0.0, 0.5])
+    np.testing.assert_allclose(medium.albedo_table[0], spectra.from_rgb(tuple(settings.albedo.color)).values)
+    np.testing.assert_allclose(medium.albedo_table[1], 0.3)
+    np.testing.assert_allclose(medium.anisotropy.values, 0.4)
+    assert medium.fluorescence is None and medium.emission is None
+
+
+def test_vdb_sequence_follows_the_frame(registered, tmp_path):
+    scene, cloud = basic_scene(tmp_path)
+    for frame in (1, 2, 3):
+        write_vdb(tmp_path / f"seq_{frame:04d}.vdb", scale=frame)
+    cloud.data.filepath = str(tmp_path / "seq_0001.vdb")
+    cloud.data.is_sequence = True
+    cloud.data.frame_duration = 3
+    scene.frame_set(3)
+    np.testing.assert_allclose(_export().scene.media[0].density.values, PATTERN * 3)
+    scene.frame_set(9)
+    with pytest.raises(SpectralError, match=r"Volume 'Cloud': its sequence .*seq_0001.vdb has no file for frame 9"):
+        _export()
+
+
+def test_fluorescence_and_blackbody_from_the_temperature_grid(registered, tmp_path):
+    scene, cloud = basic_scene(tmp_path)
+    cloud.data.filepath = str(write_vdb(tmp_path / "fire.vdb", temperature=True))
+    settings = cloud.material_slots[0].material.spectral
+    settings.use_fluorescence = settings.use_blackbody = True
+    settings.excitation.band = "UV365"
+    settings.emission.peak, settings.emission.width = 520.0, 25.0
+    settings.quantum_yield = 0.6
+    settings.temperature_scale, settings.temperature_offset = 2.0, 300.0
+    (medium,) = _export().scene.media
+    np.testing.assert_allclose(medium.fluorescence.excitation.values, spectra.gaussian(365.0, 6.0).values)
+    np.testing.assert_allclose(medium.fluorescence.emission.values, spectra.gaussian(520.0, 25.0).values)
+    assert medium.fluorescence.quantum_yield == pytest.approx(0.6)
+    np.testing.assert_allclose(medium.emission.temperature.values, PATTERN * 1000.0)
+    assert (medium.emission.temperature_scale, medium.emission.temperature_offset) == (2.0, 300.0)
+
+
+def test_evaluated_volume_with_mesh_to_volume_modifier(registered, tmp_path):
+    scene = bpy.context.scene
+    add_camera()
+    add_sun()
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.5, 0.0, 0.25))
+    cube = bpy.context.active_object
+    cube.hide_render = True
+    volume = link(bpy.data.objects.new("FromMesh", bpy.data.volumes.new("FromMesh")))
+    volume.data.materials.append(spectral_material())
+    volume.location = (0.0, 0.0, 1.0)
+    modifier = volume.modifiers.new("ToVolume", "MESH_TO_VOLUME")
+    modifier.object = cube
+    modifier.resolution_mode, modifier.voxel_size = "VOXEL_SIZE", 0.1
+    media = [m for m in _export().scene.media if m.name == "FromMesh"]
+    assert len(media) == 1, "the cube itself is not spectral, only the volume made from it"
+    grid = media[0].density
+    assert grid.values.max() == pytest.approx(1.0)
+    centres = np.argwhere(grid.values >= 0.5)  # the modifier's density falls to 0.5 at the surface
+    world = (grid.index_to_world @ np.c_[centres, np.ones(len(centres))].T).T[:, :3]
+    np.testing.assert_allclose(world.min(axis=0), [0.0, -0.5, -0.25], atol=0.16)  # the cube, in world space
+    np.testing.assert_allclose(world.max(axis=0), [1.0, 0.5, 0.75], atol=0.16)
+
+
+def test_mesh_with_spectral_material_is_voxelised(registered):
+    add_camera()
+    add_sun()
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, 0.5))
+    cube = bpy.context.active_object
+    cube.data.materials.append(spectral_material())
+    cube.spectral.voxel_size = 0.1
+    (medium,) = _export().scene.media
+    grid = medium.density
+    assert grid.values.sum() == pytest.approx(1000, rel=0.02)
+    inside = np.argwhere(grid.values > 0)
+    world = (grid.index_to_world @ np.c_[inside, np.ones(len(inside))].T).T[:, :3]
+    np.testing.assert_allclose(world.min(axis=0), [-0.45, -0.45, 0.05], atol=1e-6)
+    np.testing.assert_allclose(world.max(axis=0), [0.45, 0.45, 0.95], atol=1e-6)
+
+
+def _fake_fluid_domain(tmp_path, frames=(1,)):
+    """A smoke domain whose cache folder is written with OpenVDB (never baked, never evaluated:
+    its modifier is hidden so Mantaflow does not start)."""
+    bpy.ops.mesh.primitive_cube_add(size=2.0, location=(0.0, 0.0, 1.0))
+    domain = bpy.context.active_object
+    domain.name = "Smoke Domain"
+    domain.scale = (2.0, 1.0, 1.0)
+    modifier = domain.modifiers.new("Fluid", "FLUID")
+    modifier.show_viewport = modifier.show_render = False
+    modifier.fluid_type = "DOMAIN"
+    settings = modifier.domain_settings
+    settings.resolution_max = 16
+    settings.cache_type = "ALL"
+    settings.cache_directory = str(tmp_path / "cache")
+    cells = base_resolution((4.0, 2.0, 2.0), 16)
+    assert tuple(cells) == (16, 8, 8)
+    (tmp_path / "cache" / "data").mkdir(parents=True)
+    density = np.random.default_rng(1).uniform(0.1, 1.0, tuple(cells)).astype(np.float32)
+    for frame in frames:
+        grids.save_grid_vdb(tmp_path / "cache" / "data" / f"fluid_data_{frame:04d}.vdb",
+                            Grid(density * frame, np.eye(4), "density"),
+                            Grid(density * 2, np.eye(4), "temperature"), Grid(density / 2, np.eye(4), "flame"))
+    domain.data.materials.append(spectral_material("Fire"))
+    return domain, density
+
+
+def test_fluid_domain_reads_its_openvdb_cache(registered, tmp_path):
+    add_camera()
+    add_sun()
+    domain, density = _fake_fluid_domain(tmp_path, frames=(1, 2))
+    material = domain.material_slots[0].material.spectral
+    material.use_blackbody = True
+    material.temperature_grid = "heat"
+    bpy.context.scene.frame_set(2)
+    (medium,) = _export().scene.media
+    np.testing.assert_allclose(medium.density.values, density * 2)
+    np.testing.assert_allclose(medium.emission.temperature.values, density * 2)
+    # Cell (0, 0, 0) is centred half a cell inside the domain's lowest corner; cells are 0.25 wide.
+    matrix = medium.density.index_to_world
+    np.testing.assert_allclose(matrix @ [0, 0, 0, 1], [-2.0 + 0.125, -1.0 + 0.125, 0.0 + 0.125, 1.0], atol=1e-6)
+    np.testing.assert_allclose(matrix @ [15, 7, 7, 1], [2.0 - 0.125, 1.0 - 0.125, 2.0 - 0.125, 1.0], atol=1e-6)
+    material.temperature_grid = "flame"
+    np.testing.assert_allclose(_export().scene.media[0].emission.temperature.values, density / 2)
+
+
+def test_fluid_domain_without_a_cache_frame_is_reported(registered, tmp_path):
+    add_camera()
+    add_sun()
+    _fake_fluid_domain(tmp_path)
+    bpy.context.scene.frame_set(5)
+    with pytest.raises(SpectralError, match=r"'Smoke Domain': no baked cache for frame 5: .*fluid_data_0005.vdb"):
+        _export()
+
+
+def test_camera_conventions(registered):
+    scene = bpy.context.scene
+    camera = add_camera(location=(1.0, 2.0, 3.0))
+    camera.scale = (3.0, 3.0, 3.0)
+    data = camera.data
+    data.lens, data.sensor_width, data.sensor_height, data.sensor_fit = 50.0, 36.0, 24.0, "VERTICAL"
+    data.shift_x, data.shift_y = 0.1, -0.2
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 400, 300, 50
+    bpy.context.view_layer.update()
+    exported = camera_export.export_camera(scene)
+    assert (exported.width, exported.height) == (200, 150)
+    assert exported.fov == pytest.approx(2 * math.atan(12.0 / 50.0))
+    assert exported.sensor_fit == "VERTICAL" and (exported.shift_x, exported.shift_y) == pytest.approx((0.1, -0.2))
+    np.testing.assert_allclose(exported.to_world[:3, :3] @ [0, 0, -1], [0, 1, 0], atol=1e-6)  # looks along +Y
+    np.testing.assert_allclose(exported.to_world[:3, 3], [1, 2, 3])
+    np.testing.assert_allclose(np.linalg.norm(exported.to_world[:3, :3], axis=0), 1.0)  # scale dropped
+    data.type, data.ortho_scale = "ORTHO", 7.0
+    exported = camera_export.export_camera(scene)
+    assert exported.kind == "orthographic" and exported.ortho_scale == 7.0
+    data.type = "PANO"
+    with pytest.raises(SpectralError, match="panoramic cameras are not supported|pano cameras are not supported"):
+        camera_export.export_camera(scene)
+
+
+def test_lights_and_world(registered, tmp_path):
+    basic_scene(tmp_path)
+    sun = bpy.data.objects["Sun"]
+    sun.rotation_euler = (math.radians(45), 0.0, 0.0)
+    point = link(bpy.data.objects.new("Bulb", bpy.data.lights.new("Bulb", "POINT")))
+    point.location, point.data.energy = (1.0, 2.0, 3.0), 100.0
+    point.data.spectral.spectrum.source = "BLACKBODY"
+    point.data.spectral.spectrum.temperature = 2700.0
+    spot = link(bpy.data.objects.new("Spot", bpy.data.lights.new("Spot", "SPOT")))
+    spot.data.spot_size, spot.data.spot_blend = math.radians(30), 0.3
+    link(bpy.data.objects.new("Panel", bpy.data.lights.new("Panel", "AREA")))
+    bpy.context.scene.world = bpy.data.worlds.new("Sky")
+    bpy.context.scene.world.spectral.kind = "sky"
+    bpy.context.scene.world.spectral.strength = 0.5
+    result = _export()
+    lights = {light.name: light for light in result.scene.lights}
+    assert set(lights) == {"Sun", "Bulb", "Spot", "Sky"}
+    assert any("'Panel': area lights are not supported" in warning for warning in result.warnings)
+    # Blender's sun shines along its −Z; ours points towards the sun (+Z), tilted by the 45° X rotation.
+    np.testing.assert_allclose(lights["Sun"].direction, [0.0, -math.sqrt(0.5), math.sqrt(0.5)], atol=1e-6)
+    assert lights["Sun"].strength == 3.0
+    np.testing.assert_allclose(lights["Sun"].spectrum.values, spectra.illuminant("D65").values)
+    assert lights["Bulb"].strength == pytest.approx(100.0 / (4 * math.pi)) == pytest.approx(point_intensity(100.0))
+    np.testing.assert_allclose(lights["Bulb"].position, [1.0, 2.0, 3.0])
+    np.testing.assert_allclose(lights["Bulb"].spectrum.values, spectra.blackbody(2700.0).values)
+    np.testing.assert_allclose(lights["Spot"].spot_direction, [0.0, 0.0, -1.0], atol=1e-6)
+    assert lights["Spot"].spot_size == pytest.approx(math.radians(30))
+    assert lights["Spot"].spot_blend == pytest.approx(0.3)
+    assert lights["Sky"].kind == "sky" and lights["Sky"].strength == 0.5 and lights["Sky"].horizon_spectrum is not None
+
+
+def test_missing_vdb_file_is_named(registered, tmp_path):
+    basic_scene(tmp_path)
+    bpy.data.objects["Cloud"].data.filepath = str(tmp_path / "gone.vdb")
+    with pytest.raises(SpectralError, match=r"Volume 'Cloud': VDB file .*gone.vdb does not exist"):
+        _export()
+
+
+def test_missing_grid_lists_the_grids(registered, tmp_path):
+    _scene, cloud = basic_scene(tmp_path)
+    cloud.spectral.density_grid = "smoke"
+    with pytest.raises(SpectralError, match=r"Volume 'Cloud': .*'smoke'.*density"):
+        _export()
+
+
+def test_no_camera_is_reported(registered, tmp_path):
+    basic_scene(tmp_path)
+    bpy.context.scene.camera = None
+    with pytest.raises(SpectralError, match="has no camera"):
+        _export()
+
+
+def test_volume_without_spectral_material_is_reported(registered, tmp_path):
+    _scene, cloud = basic_scene(tmp_path)
+    cloud.material_slots[0].material.spectral.enabled = False
+    with pytest.raises(SpectralError, match=r"object 'Cloud' is a volume but its materials \(Smoke\) are not spectral"):
+        _export()
+
+
+def test_no_lights_is_reported(registered, tmp_path):
+    basic_scene(tmp_path)
+    bpy.data.objects.remove(bpy.data.objects["Sun"])
+    with pytest.raises(SpectralError, match="the scene has no lights"):
+        _export()
+
+
+def test_export_operator_writes_a_loadable_scene(registered, tmp_path):
+    basic_scene(tmp_path)
+    out = tmp_path / "exported" / "scene.json"
+    assert bpy.ops.spectral.export_scene(filepath=str(out)) == {"FINISHED"}
+    loaded = load_scene(out)
+    np.testing.assert_allclose(loaded.media[0].density.values, PATTERN)
+    assert (loaded.camera.width, loaded.camera.height, loaded.settings.spp) == (16, 12, 2)
+
+
+def test_export_operator_writes_nothing_on_bad_input(registered, tmp_path):
+    basic_scene(tmp_path)
+    out = tmp_path / "exported" / "scene.json"
+    out.parent.mkdir()
+    out.write_text("previous export")
+    bpy.data.objects["Cloud"].data.filepath = str(tmp_path / "gone.vdb")
+    with pytest.raises(RuntimeError, match="Nothing exported: Volume 'Cloud': VDB file"):
+        bpy.ops.spectral.export_scene(filepath=str(out))
+    assert out.read_text() == "previous export" and sorted(p.name for p in out.parent.iterdir()) == ["scene.json"]

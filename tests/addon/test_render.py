@@ -1,0 +1,157 @@
+"""Rendering: the Spectral Volume engine (F12), Render to Image, the render job, and the CLI."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from addon import cli
+from addon.export.scene import export_scene
+from addon.render_job import RenderJob
+from addon.tracer import image_io
+from addon.tracer.render import render
+from tests.addon.builders import basic_scene
+from tests.addon.exr import read_all_parts
+
+bpy = pytest.importorskip("bpy")
+
+ROOT = Path(__file__).resolve().parents[2]
+pytestmark = pytest.mark.slow  # the first render of a process compiles the kernel (about a minute)
+
+
+def _reference(scene):
+    return render(export_scene(bpy.context.evaluated_depsgraph_get()).scene).film
+
+
+def test_f12_writes_combined_and_xyz_passes(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    scene.render.engine = "SPECTRAL_VOLUME"
+    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    scene.render.filepath = str(tmp_path / "f12.exr")
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    channels = read_all_parts(tmp_path / "f12.exr")
+    assert {"ViewLayer.XYZ.X", "ViewLayer.XYZ.Y", "ViewLayer.XYZ.Z", "ViewLayer.XYZ Variance.Y",
+            "ViewLayer.Combined.R", "ViewLayer.Combined.A"} <= set(channels)
+    film = _reference(scene)  # same scene and seed: the same image
+    y = channels["ViewLayer.XYZ.Y"]
+    assert y.shape == (12, 16) and y.max() > 0
+    np.testing.assert_allclose(y, film.xyz[..., 1], rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(channels["ViewLayer.Combined.R"], film.rgb()[..., 0], rtol=1e-4, atol=1e-6)
+    assert channels["ViewLayer.Combined.A"].min() == 1.0
+
+
+def test_f12_with_bad_input_reports_and_keeps_the_old_file(registered, tmp_path):
+    scene, cloud = basic_scene(tmp_path)
+    cloud.data.filepath = str(tmp_path / "gone.vdb")
+    scene.render.engine = "SPECTRAL_VOLUME"
+    output = tmp_path / "f12.exr"
+    output.write_bytes(b"previous render")
+    scene.render.filepath = str(output)
+    with pytest.raises(RuntimeError, match=r"Volume 'Cloud': VDB file .*gone.vdb does not exist"):
+        bpy.ops.render.render(write_still=True)
+    assert output.read_bytes() == b"previous render"
+
+
+def test_render_to_image_fills_a_float_image_and_an_exr(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    exr = tmp_path / "out" / "render.exr"
+    assert bpy.ops.spectral.render_image(image_name="Spectral", exr_path=str(exr)) == {"FINISHED"}
+    image = bpy.data.images["Spectral"]
+    assert image.is_float and tuple(image.size) == (16, 12) and image.colorspace_settings.name == "Linear Rec.709"
+    pixels = np.array(image.pixels[:], dtype=np.float32).reshape(12, 16, 4)[::-1]
+    film = _reference(scene)
+    np.testing.assert_allclose(pixels[..., :3], film.rgb(), rtol=1e-4, atol=1e-6)
+    channels = image_io.read_exr(exr)
+    np.testing.assert_allclose(channels["spectral.Y"], film.xyz[..., 1], rtol=1e-4, atol=1e-6)
+
+
+def test_failed_render_to_image_touches_nothing(registered, tmp_path):
+    scene, cloud = basic_scene(tmp_path)
+    image = bpy.data.images.new("Spectral", 4, 4, alpha=True, float_buffer=True)
+    image.pixels.foreach_set(np.full(64, 0.25, dtype=np.float32))
+    exr = tmp_path / "render.exr"
+    exr.write_bytes(b"previous render")
+    cloud.data.filepath = str(tmp_path / "gone.vdb")
+    with pytest.raises(RuntimeError, match="Nothing rendered: Volume 'Cloud'"):
+        bpy.ops.spectral.render_image(image_name="Spectral", exr_path=str(exr))
+    assert tuple(image.size) == (4, 4) and set(image.pixels[:]) == {0.25}
+    assert exr.read_bytes() == b"previous render"
+
+
+def test_cancelled_job_leaves_no_result(registered, tmp_path):
+    basic_scene(tmp_path)
+    job = RenderJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
+    job.cancel()
+    job.start()
+    job._thread.join(timeout=300)
+    assert not job.running and job.error is None and job.result.cancelled and not job.succeeded
+
+
+def test_job_reports_progress_from_its_thread(registered, tmp_path):
+    basic_scene(tmp_path)
+    job = RenderJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
+    job.start()
+    job._thread.join(timeout=300)
+    assert job.succeeded and job.fraction == 1.0
+
+
+def test_cli_command_is_registered_and_removed(clean):
+    import addon
+
+    addon.register()
+    assert cli._handle is not None
+    addon.unregister()
+    assert cli._handle is None
+
+
+def _run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "addon.cli", *map(str, args)], cwd=ROOT, capture_output=True,
+                          text=True, timeout=600)
+
+
+def _save_blend(tmp_path):
+    basic_scene(tmp_path)
+    path = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+def test_cli_renders_a_blend_to_exr(registered, tmp_path):
+    blend = _save_blend(tmp_path)
+    out = tmp_path / "cli.exr"
+    done = _run_cli("render", blend, "--out", out, "--frame", 1, "--spp", 1, "--quiet")
+    assert done.returncode == 0, done.stderr
+    assert "wrote" in done.stdout
+    channels = image_io.read_exr(out)
+    assert channels["spectral.Y"].shape == (12, 16) and channels["spectral.Y"].max() > 0
+
+
+def test_cli_reports_bad_input_and_keeps_the_output(registered, tmp_path):
+    blend = _save_blend(tmp_path)
+    (tmp_path / "cloud.vdb").unlink()
+    out = tmp_path / "cli.exr"
+    out.write_bytes(b"previous render")
+    done = _run_cli("render", blend, "--out", out, "--quiet")
+    assert done.returncode == 1
+    assert "error: Volume 'Cloud': VDB file" in done.stderr and "Traceback" not in done.stderr
+    assert out.read_bytes() == b"previous render"
+    missing = _run_cli("render", tmp_path / "nowhere.blend", "--out", out)
+    assert missing.returncode == 1 and "nowhere.blend does not exist" in missing.stderr
+    assert _run_cli("draw").returncode == 2
+
+
+def test_unreachable_scheduler_is_reported_and_writes_nothing(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    scene.render.engine = "SPECTRAL_VOLUME"
+    scene.spectral.scheduler_address = "tcp://127.0.0.1:9"  # the discard port: nothing listens there
+    output = tmp_path / "f12.exr"
+    output.write_bytes(b"previous render")
+    scene.render.filepath = str(output)
+    with pytest.raises(RuntimeError, match=r"cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+        bpy.ops.render.render(write_still=True)
+    assert output.read_bytes() == b"previous render"
+    with pytest.raises(RuntimeError, match="Render failed, nothing written: cannot reach the Dask scheduler"):
+        bpy.ops.spectral.render_image(image_name="Farm")
+    assert "Farm" not in bpy.data.images

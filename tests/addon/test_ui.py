@@ -1,0 +1,204 @@
+"""Panels, menus and UI lists draw against real data; presets and spectrum operators work."""
+
+from types import SimpleNamespace
+
+import pytest
+
+from addon import curves, presets, registration
+from addon.props.render import ENGINE_ID
+from addon.tracer.errors import SpectralError
+
+from tests.addon.recording import RecordingLayout, draw
+
+bpy = pytest.importorskip("bpy")
+
+
+def _classes(base):
+    return [cls for module in registration.MODULES for cls in module.CLASSES if issubclass(cls, base)]
+
+
+def _scene_with_everything():
+    """A scene with a volume object, a mesh, every light type and a sky world, materials fully set."""
+    scene = bpy.context.scene
+    material = bpy.data.materials.new("Smoke")
+    settings = material.spectral
+    settings.enabled = settings.use_fluorescence = settings.use_blackbody = True
+    settings.albedo_levels.add().spectrum.source = "CURVE"
+    volume = bpy.data.objects.new("Volume", bpy.data.volumes.new("Volume"))
+    volume.data.materials.append(material)
+    scene.collection.objects.link(volume)
+    lights = []
+    for kind in ("SUN", "POINT", "SPOT", "AREA"):
+        light = bpy.data.objects.new(kind.title(), bpy.data.lights.new(kind.title(), kind))
+        scene.collection.objects.link(light)
+        lights.append(light)
+    scene.world = bpy.data.worlds.new("World")
+    scene.world.spectral.kind = "sky"
+    scene.render.engine = ENGINE_ID
+    return scene, volume, material, lights
+
+
+def _context(scene, obj, material=None):
+    light = obj.data if obj is not None and obj.type == "LIGHT" else None
+    return SimpleNamespace(scene=scene, engine=scene.render.engine, object=obj, active_object=obj,
+                           material=material, light=light, world=scene.world)
+
+
+def test_every_panel_draws_for_every_object(registered):
+    scene, volume, material, lights = _scene_with_everything()
+    panels = _classes(bpy.types.Panel)
+    assert len(panels) >= 10
+    for obj in (volume, *lights, None):
+        context = _context(scene, obj, material if obj is volume else None)
+        for panel in panels:
+            if hasattr(panel, "poll") and not panel.poll(context):
+                continue
+            draw(panel, context)
+            if hasattr(panel, "draw_header"):
+                draw(panel, context, "draw_header")
+
+
+def test_properties_panels_show_with_the_spectral_engine_only(registered):
+    scene, volume, material, _lights = _scene_with_everything()
+    context = _context(scene, volume, material)
+    assert bpy.types.SPECTRAL_PT_material.poll(context) and bpy.types.SPECTRAL_PT_render.poll(context)
+    scene.render.engine = "CYCLES"
+    context = _context(scene, volume, material)
+    assert not bpy.types.SPECTRAL_PT_material.poll(context) and not bpy.types.SPECTRAL_PT_render.poll(context)
+
+
+@pytest.mark.parametrize("role", ["albedo", "extinction", "anisotropy", "excitation", "emission"])
+def test_material_panels_draw_every_spectrum_source(registered, role):
+    scene, volume, material, _lights = _scene_with_everything()
+    spectrum = getattr(material.spectral, role)
+    context = _context(scene, volume, material)
+    for item in spectrum.bl_rna.properties["source"].enum_items:
+        spectrum.source = item.identifier
+        for panel in _classes(bpy.types.Panel):
+            if getattr(panel, "bl_context", "") == "material":
+                draw(panel, context)
+    assert curves.find_mapping(spectrum.curve) is not None  # the Curve source made its curve
+
+
+def test_a_curve_draws_its_widget_and_a_bad_csv_its_error(registered):
+    scene, volume, material, _lights = _scene_with_everything()
+    settings = material.spectral
+    settings.albedo.source = "CURVE"
+    layout = draw(bpy.types.SPECTRAL_PT_material, _context(scene, volume, material))
+    assert any(name == "template_curve_mapping" for name, _a, _k in layout.calls)
+    settings.extinction.source = "CSV"
+    layout = draw(bpy.types.SPECTRAL_PT_material, _context(scene, volume, material))
+    assert any("no CSV file chosen" in text for text in layout.texts())
+
+
+def test_light_spectrum_shows_presets_and_swatch(registered):
+    scene, _volume, _material, lights = _scene_with_everything()
+    sun = lights[0]
+    layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, sun))
+    assert ("menu", ("SPECTRAL_MT_light_presets",), {"text": "", "icon": "PRESET"}) in layout.calls
+    assert any(name == "prop" and args[1] == "preview" for name, args, _k in layout.calls)
+    area = lights[3]
+    layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, area))
+    assert any("not rendered spectrally" in text for text in layout.texts())
+
+
+def test_menus_and_ui_list_draw(registered):
+    scene, volume, material, lights = _scene_with_everything()
+    context = SimpleNamespace(spectral_spectrum=lights[0].data.spectral.spectrum)
+    layout = draw(bpy.types.SPECTRAL_MT_light_presets, context)
+    assert len([c for c in layout.calls if c[0] == "operator"]) == len(presets.LIGHT_PRESETS)
+    draw(bpy.types.SPECTRAL_MT_material_presets, SimpleNamespace())
+    level = material.spectral.albedo_levels[0]
+    bpy.types.SPECTRAL_UL_albedo_levels.draw_item(None, None, RecordingLayout(), material.spectral, level, 0,
+                                                   material.spectral, "albedo_index")
+
+
+def test_material_preset_sets_everything_and_resets_the_rest(registered):
+    material = bpy.data.materials.new("Dye")
+    material.spectral.use_blackbody = True
+    material.spectral.albedo.source = "COLOR"
+    with bpy.context.temp_override(material=material):
+        assert bpy.ops.spectral.apply_material_preset(preset="FLUORESCEIN") == {"FINISHED"}
+    settings = material.spectral
+    assert settings.enabled and settings.use_fluorescence and not settings.use_blackbody
+    assert settings.albedo.source == "CONSTANT" and settings.albedo.value == pytest.approx(0.95)
+    assert settings.emission.peak == pytest.approx(515.0) and settings.quantum_yield == pytest.approx(0.93)
+    with bpy.context.temp_override(material=material):
+        bpy.ops.spectral.apply_material_preset(preset="HAZE")
+    assert settings.phase == "rayleigh" and settings.extinction.source == "CURVE"
+    assert curves.points(curves.find_mapping(settings.extinction.curve))[0] == pytest.approx((360.0, 1.0))
+
+
+def _target(settings):
+    owner = settings.id_data
+    return {"id_type": owner.id_type, "id_name": owner.name, "data_path": settings.path_from_id()}
+
+
+def test_light_preset_operator(registered):
+    spectrum = bpy.data.lights.new("Lamp", "POINT").spectral.spectrum
+    assert bpy.ops.spectral.apply_light_preset(preset="CANDLE", **_target(spectrum)) == {"FINISHED"}
+    assert spectrum.source == "BLACKBODY" and spectrum.temperature == pytest.approx(1900.0)
+
+
+def test_import_csv_accepts_a_good_file(registered, tmp_path):
+    good = tmp_path / "lamp.csv"
+    good.write_text("wavelength,value\n400,0.1\n500,1.0\n700,0.4\n")
+    spectrum = bpy.data.lights.new("Lamp", "POINT").spectral.spectrum
+    assert bpy.ops.spectral.import_spectrum_csv(filepath=str(good), **_target(spectrum)) == {"FINISHED"}
+    assert spectrum.source == "CSV" and spectrum.filepath == str(good)
+
+
+def test_import_csv_rejects_a_bad_file_and_changes_nothing(registered, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("400,0.1\n390,0.2\n")
+    spectrum = bpy.data.lights.new("Lamp", "POINT").spectral.spectrum
+    with pytest.raises(RuntimeError, match=r"Not imported: .*bad.csv, line 2: wavelength 390 nm does not increase"):
+        bpy.ops.spectral.import_spectrum_csv(filepath=str(bad), **_target(spectrum))
+    assert spectrum.source == "ILLUMINANT" and spectrum.filepath == ""
+
+
+def test_edit_as_curve_keeps_the_shape(registered):
+    from addon.export.spectra import to_spectrum
+
+    albedo = bpy.data.materials.new("Red").spectral.albedo
+    albedo.source = "COLOR"
+    albedo.color = (0.8, 0.1, 0.1)
+    before = to_spectrum(albedo).values
+    assert bpy.ops.spectral.spectrum_to_curve(**_target(albedo)) == {"FINISHED"}
+    assert albedo.source == "CURVE"
+    after = to_spectrum(albedo).values
+    assert abs(after - before).max() < 0.05
+    assert tuple(albedo.preview) == pytest.approx((0.8, 0.1, 0.1), abs=0.03)
+
+
+def test_removing_an_albedo_level_removes_its_curve(registered):
+    material = bpy.data.materials.new("Layered")
+    with bpy.context.temp_override(material=material):
+        bpy.ops.spectral.albedo_level_add()
+        material.spectral.albedo_levels[0].spectrum.source = "CURVE"
+        assert len(material.spectral.curve_group.nodes) == 1
+        bpy.ops.spectral.albedo_level_remove()
+    assert len(material.spectral.albedo_levels) == 0 and len(material.spectral.curve_group.nodes) == 0
+
+
+def test_missing_curve_is_reported_not_raised(registered):
+    albedo = bpy.data.materials.new("Lost").spectral.albedo
+    albedo.source = "CURVE"
+    curves.discard(albedo.curve)
+    from addon.export.spectra import to_spectrum
+    with pytest.raises(SpectralError, match="the curve is missing"):
+        to_spectrum(albedo)
+
+
+def test_copied_material_can_make_its_curves_its_own(registered):
+    material = bpy.data.materials.new("Original")
+    material.spectral.albedo.source = "CURVE"
+    copy = material.copy()
+    assert copy.spectral.curve_group == material.spectral.curve_group and curves.is_shared(copy)
+    scene, volume, _material, _lights = _scene_with_everything()
+    layout = draw(bpy.types.SPECTRAL_PT_material, _context(scene, volume, copy))
+    assert "Curves shared with a copy" in layout.texts()
+    assert bpy.ops.spectral.curves_single_user(**_target(copy.spectral.albedo)) == {"FINISHED"}
+    assert copy.spectral.curve_group != material.spectral.curve_group and not curves.is_shared(material)
+    curves.set_points(curves.find_mapping(copy.spectral.albedo.curve), (400, 700), (0.1, 0.2))
+    assert curves.points(curves.find_mapping(material.spectral.albedo.curve))[0][1] == pytest.approx(0.9)
