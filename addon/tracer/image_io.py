@@ -82,12 +82,16 @@ def write_npy(path, xyz: np.ndarray) -> Path:
 
 
 def read_exr(path) -> dict[str, np.ndarray]:
-    """Channels of an EXR file by name (for tests and tools)."""
+    """Channels of an EXR file by name, from every part (Blender writes one part per render pass)."""
     oiio = _open_image_io()
     image = oiio.ImageInput.open(str(path))
     if image is None:
         raise SpectralError(f"cannot read image {path}: {oiio.geterror()}")
-    spec = image.spec()
-    pixels = image.read_image("float")
+    channels, part = {}, 0
+    while image.seek_subimage(part, 0):
+        spec = image.spec()
+        pixels = image.read_image(part, 0, 0, spec.nchannels, "float")
+        channels.update({name: pixels[:, :, i] for i, name in enumerate(spec.channelnames)})
+        part += 1
     image.close()
-    return {name: pixels[:, :, i] for i, name in enumerate(spec.channelnames)}
+    return channels

@@ -13,7 +13,6 @@ from addon.render_job import RenderJob
 from addon.tracer import image_io
 from addon.tracer.render import render
 from tests.addon.builders import basic_scene
-from tests.addon.exr import read_all_parts
 
 bpy = pytest.importorskip("bpy")
 
@@ -31,7 +30,7 @@ def test_f12_writes_combined_and_xyz_passes(registered, tmp_path):
     scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
     scene.render.filepath = str(tmp_path / "f12.exr")
     assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
-    channels = read_all_parts(tmp_path / "f12.exr")
+    channels = image_io.read_exr(tmp_path / "f12.exr")
     assert {"ViewLayer.XYZ.X", "ViewLayer.XYZ.Y", "ViewLayer.XYZ.Z", "ViewLayer.XYZ Variance.Y",
             "ViewLayer.Combined.R", "ViewLayer.Combined.A"} <= set(channels)
     film = _reference(scene)  # same scene and seed: the same image
