@@ -122,9 +122,11 @@ def compile_timed(scene: Scene) -> tuple[KernelScene, float]:
 
 
 def warm_up(kernel_scene: KernelScene) -> float:
-    """Compile the kernel (or load it from Numba's cache) with a 1-sample 2×2 render; seconds taken."""
+    """Compile the kernel (or load it from Numba's cache), then render one untimed sample of the whole
+    image (threads started, memory touched); seconds taken."""
     start = time.perf_counter()
     render_unit(kernel_scene, 0, (0, 1), (0, 0, min(2, kernel_scene.width), min(2, kernel_scene.height)), 0)
+    render_unit(kernel_scene, 0, (0, 1), (0, 0, kernel_scene.width, kernel_scene.height), 1)
     return time.perf_counter() - start
 
 

@@ -21,6 +21,8 @@ import argparse
 import time
 
 from bench import counting
+from addon.tracer.compile import compile_scene
+
 from bench.measure import PeakRSS, compile_timed, fmt_bytes, machine, render_ours, rss, warm_up
 from bench.scenes import CACHE, CloudSpec, cloud_density, cloud_scene
 
@@ -71,59 +73,71 @@ def main(argv=None) -> int:
               f"(8 voxel reads).")
     if not peak.resettable:
         print("memory: VmHWM cannot be reset here; peaks below are of the whole process so far")
-    rows, warmed, counting_ready = [], False, False
-    for resolution in args.resolutions:
+    rows, warmed = [], False
+    for resolution in args.resolutions:  # phase 1: time and memory, real kernel only
         peak.reset()
         before = rss()
         start = time.perf_counter()
-        density, cached = cloud_density(resolution, cache=None if cache is None else cache)
+        density, cached = cloud_density(resolution, cache=cache)
         generation = time.perf_counter() - start
         generation_peak = peak.peak() - before
         source = "loaded from cache" if cached else f"generated, peak +{fmt_bytes(generation_peak)} over the process"
         print(f"\n{resolution}³ grid ({fmt_bytes(density.values.nbytes)} float32): {source} in {generation:.1f} s")
         for g in args.g:
-            spec = CloudSpec(resolution=resolution, g=g, width=args.width, height=args.height)
-            scene = cloud_scene(spec, density, seed=0)
+            scene = cloud_scene(CloudSpec(resolution=resolution, g=g, width=args.width, height=args.height),
+                                density, seed=0)
             baseline = rss()
             peak.reset()
             kernel_scene, compile_seconds = compile_timed(scene)
             if not warmed:
-                print(f"  kernel compiled or loaded from Numba's cache in {warm_up(kernel_scene):.1f} s (not timed)")
+                print(f"  kernel compiled or loaded from Numba's cache, and warmed up, in "
+                      f"{warm_up(kernel_scene):.1f} s (not timed)")
                 warmed = True
             image = render_ours(kernel_scene, args.spp, seed=0)
-            tracer_peak = peak.peak()
-            pixel_samples = args.width * args.height * args.spp
-            rate = pixel_samples / image.seconds
-            row = {"resolution": resolution, "g": g, "rate": rate, "seconds": image.seconds,
-                   "compile": compile_seconds, "peak": tracer_peak, "baseline": baseline,
+            row = {"resolution": resolution, "g": g, "rate": args.width * args.height * args.spp / image.seconds,
+                   "seconds": image.seconds, "compile": compile_seconds, "peak": peak.peak(), "baseline": baseline,
                    "mean_y": float(image.y.mean())}
-            if args.count_spp:
-                if not counting_ready:
-                    start = time.perf_counter()
-                    counting.count(kernel_scene._replace(width=2, height=2), 1, 0, cache or CACHE)
-                    print(f"  counting kernel compiled or loaded in {time.perf_counter() - start:.1f} s (not timed)")
-                    counting_ready = True
-                counts = counting.count(kernel_scene, args.count_spp, 0, cache or CACHE)
-                counted_samples = args.width * args.height * args.count_spp
-                row.update({name: value / counted_samples for name, value in counts.items()})
-                row["lookups_per_second"] = row["density_lookups"] * rate
             rows.append(row)
             report(row)
-            del kernel_scene
-        del density, scene
+            del kernel_scene, scene
+        del density
+    if args.count_spp:  # phase 2: counts, after the memory figures (compiling the copy takes memory too)
+        count_lookups(rows, args, cache)
     summary(rows, args)
     return 0
 
 
+def count_lookups(rows: list[dict], args, cache) -> None:
+    """Fill in counts per pixel-sample for every row, running the counting copy of the kernel."""
+    print(f"\ncounting (instrumented kernel copy, first {args.count_spp} spp of the same paths):")
+    start = time.perf_counter()
+    folder = cache or CACHE
+    density = None
+    for row in rows:
+        if density is None or density.values.shape[0] != row["resolution"]:
+            density, _ = cloud_density(row["resolution"], cache=cache)
+        scene = cloud_scene(CloudSpec(resolution=row["resolution"], g=row["g"], width=args.width,
+                                      height=args.height), density, seed=0)
+        kernel_scene = compile_scene(scene)
+        if start is not None:
+            counting.count(kernel_scene._replace(width=2, height=2), 1, 0, folder)
+            print(f"  counting kernel compiled or loaded in {time.perf_counter() - start:.1f} s")
+            start = None
+        counts = counting.count(kernel_scene, args.count_spp, 0, folder)
+        counted_samples = args.width * args.height * args.count_spp
+        row.update({name: value / counted_samples for name, value in counts.items()})
+        row["lookups_per_second"] = row["density_lookups"] * row["rate"]
+        print(f"  {row['resolution']}³ g={row['g']:<4g} {row['density_lookups']:7.1f} density look-ups, "
+              f"{row['shadow_rays']:.2f} shadow rays, {row['dda_steps']:.1f} DDA steps per pixel-sample -> "
+              f"{row['lookups_per_second'] / 1e6:.2f} M look-ups/s ({1e9 / row['lookups_per_second']:.0f} ns of "
+              f"kernel time per look-up, all work included)")
+        del kernel_scene, scene
+
+
 def report(row: dict) -> None:
-    text = (f"  g={row['g']:<4g} {row['rate'] / 1e3:9.1f} k pixel-samples/s ({row['seconds']:.2f} s kernel, "
-            f"lowering {row['compile']:.2f} s), mean Y {row['mean_y']:.4f}")
-    if "density_lookups" in row:
-        text += (f"\n         {row['density_lookups']:7.1f} density look-ups, {row['shadow_rays']:.2f} shadow rays, "
-                 f"{row['dda_steps']:.1f} DDA steps per pixel-sample -> {row['lookups_per_second'] / 1e6:.2f} M "
-                 f"look-ups/s ({1e9 / row['lookups_per_second']:.0f} ns of kernel time per look-up, all included)")
-    text += f"\n         peak RSS while lowering + rendering: {fmt_bytes(row['peak'])} (before: {fmt_bytes(row['baseline'])})"
-    print(text)
+    print(f"  g={row['g']:<4g} {row['rate'] / 1e3:9.1f} k pixel-samples/s ({row['seconds']:.2f} s kernel, lowering "
+          f"{row['compile']:.2f} s), mean Y {row['mean_y']:.4f}; peak RSS while lowering + rendering "
+          f"{fmt_bytes(row['peak'])} (before: {fmt_bytes(row['baseline'])})")
 
 
 def summary(rows: list[dict], args) -> None:
