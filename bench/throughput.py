@@ -20,9 +20,11 @@ rendering the scene (the tracer), checked against `--memory-limit-gib` (2 GiB, i
 import argparse
 import time
 
-from bench import counting
+import numpy as np
+
 from addon.tracer.compile import compile_scene
 
+from bench import counting
 from bench.measure import PeakRSS, compile_timed, fmt_bytes, machine, render_ours, rss, warm_up
 from bench.scenes import CACHE, CloudSpec, cloud_density, cloud_scene
 
@@ -39,6 +41,8 @@ def parse(argv=None):
     parser.add_argument("--spp", type=int, help="timed samples per pixel (default 16)")
     parser.add_argument("--count-spp", type=int, help="samples per pixel run through the counting kernel "
                         "(default 4; 0 skips counting)")
+    parser.add_argument("--repeats", type=int, help="timed renders of the same samples; the median rate is "
+                        "reported with the range (default 3; quick 2)")
     parser.add_argument("--threads", type=int, help="Numba threads (default: all)")
     parser.add_argument("--memory-limit-gib", type=float, default=2.0,
                         help="peak RSS allowed while lowering and rendering (default 2)")
@@ -50,6 +54,7 @@ def parse(argv=None):
     args.width = args.width or (64 if quick else 256)
     args.height = args.height or (64 if quick else 256)
     args.spp = args.spp or (4 if quick else 16)
+    args.repeats = max(1, args.repeats or (2 if quick else 3))
     args.count_spp = min(args.spp, args.count_spp if args.count_spp is not None else (1 if quick else 4))
     return args
 
@@ -93,10 +98,13 @@ def main(argv=None) -> int:
                 print(f"  kernel compiled or loaded from Numba's cache, and warmed up, in "
                       f"{warm_up(kernel_scene):.1f} s (not timed)")
                 warmed = True
-            image = render_ours(kernel_scene, args.spp, seed=0)
-            row = {"resolution": resolution, "g": g, "rate": args.width * args.height * args.spp / image.seconds,
-                   "seconds": image.seconds, "compile": compile_seconds, "peak": peak.peak(), "baseline": baseline,
-                   "mean_y": float(image.y.mean())}
+            images = [render_ours(kernel_scene, args.spp, seed=0) for _ in range(args.repeats)]
+            seconds = sorted(image.seconds for image in images)
+            pixel_samples = args.width * args.height * args.spp
+            row = {"resolution": resolution, "g": g, "rate": pixel_samples / float(np.median(seconds)),
+                   "range": (pixel_samples / seconds[-1], pixel_samples / seconds[0]), "seconds": float(np.median(seconds)),
+                   "compile": compile_seconds, "peak": peak.peak(), "baseline": baseline,
+                   "mean_y": float(images[0].y.mean())}
             rows.append(row)
             report(row)
             del kernel_scene, scene
@@ -135,7 +143,9 @@ def count_lookups(rows: list[dict], args, cache) -> None:
 
 
 def report(row: dict) -> None:
-    print(f"  g={row['g']:<4g} {row['rate'] / 1e3:9.1f} k pixel-samples/s ({row['seconds']:.2f} s kernel, lowering "
+    low, high = row["range"]
+    print(f"  g={row['g']:<4g} {row['rate'] / 1e3:9.1f} k pixel-samples/s (range {low / 1e3:.1f}–{high / 1e3:.1f}; "
+          f"median {row['seconds']:.2f} s kernel, lowering "
           f"{row['compile']:.2f} s), mean Y {row['mean_y']:.4f}; peak RSS while lowering + rendering "
           f"{fmt_bytes(row['peak'])} (before: {fmt_bytes(row['baseline'])})")
 
