@@ -214,6 +214,15 @@ def corrected_mse(image_values: np.ndarray, reference_values: np.ndarray, refere
     return max(mse - reference_variance, 0.1 * mse)
 
 
+def warn_reference(reference: Image, images) -> None:
+    """Say so when the reference has fewer than 16× the samples of an image it judges: its noise is
+    subtracted from the MSE, but that estimate is only good when the reference is much the cleaner."""
+    most = max(image.spp for image in images)
+    if reference.spp < 16 * most:
+        print(f"  note: the reference has {reference.spp} spp, only {reference.spp / most:.0f}× the {most} spp of an "
+              f"image it judges; raise --reference-spp for firmer figures")
+
+
 def white_for(reference: Image) -> np.ndarray:
     """The white for CIELAB: D65's chromaticity at the 99th percentile of the reference's luminance."""
     y_white = float(np.percentile(reference.y, 99))

@@ -15,7 +15,7 @@ is wrong, not that a renderer is faster.
 with an asymmetric test grid (the right conversion against deliberately wrong ones), and each light's
 units alone (sun only, environment only).
 
-    python -m bench.vs_mitsuba                 # 64³ and 128³, g 0 and 0.6, 256×256, 8 s per renderer
+    python -m bench.vs_mitsuba                 # 64³ and 128³, g 0 and 0.6, 256×256, 10 s per renderer
     python -m bench.vs_mitsuba --quick --check # small and short: proves it runs
     python -m bench.vs_mitsuba --ours-variant inline+albedo   # what the proposed kernel changes would give
 """
@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from bench.measure import (Image, OurRenderer, at_time, compile_timed, corrected_mse, efficiency, equal_time, machine,
-                           reference_noise, render_ours, rmse, warm_up)
+                           reference_noise, render_ours, rmse, warn_reference, warm_up)
 from bench.mitsuba_scene import BLENDER_TO_MITSUBA_CAMERA, load_mitsuba, scene_dict, volume_data
 from bench.kernel_copy import CopyRenderer, compile_copy, kernel_copy
 from bench.scenes import CACHE, CloudSpec, cloud_density, cloud_scene, orientation_grid
@@ -46,8 +46,8 @@ def parse(argv=None):
     parser.add_argument("--g", type=float, nargs="+", help="HG anisotropies (default 0 0.6; quick: 0.6)")
     parser.add_argument("--width", type=int, help="image width (default 256)")
     parser.add_argument("--height", type=int, help="image height (default 256)")
-    parser.add_argument("--reference-spp", type=int, help="samples per pixel of our reference (default 4096)")
-    parser.add_argument("--seconds", type=float, help="wall-clock budget per renderer and scene (default 8)")
+    parser.add_argument("--reference-spp", type=int, help="samples per pixel of our reference (default 512; quick 256)")
+    parser.add_argument("--seconds", type=float, help="wall-clock budget per renderer and scene (default 10)")
     parser.add_argument("--integrator", default="volpath", choices=["volpath", "volpathmis"],
                         help="Mitsuba integrator (default volpath)")
     parser.add_argument("--threads", type=int, help="threads for both renderers (default: all cores)")
@@ -59,8 +59,8 @@ def parse(argv=None):
     args.g = args.g if args.g is not None else ([0.6] if quick else [0.0, 0.6])
     args.width = args.width or (48 if quick else 256)
     args.height = args.height or (48 if quick else 256)
-    args.reference_spp = args.reference_spp or (256 if quick else 4096)
-    args.seconds = args.seconds or (2.0 if quick else 8.0)
+    args.reference_spp = args.reference_spp or (256 if quick else 512)
+    args.seconds = args.seconds or (2.0 if quick else 10.0)
     return args
 
 
@@ -168,6 +168,7 @@ def compare(spec: CloudSpec, density, mi, args) -> dict:
         ours_renderer = OurRenderer(kernel_scene, seed=12)
     images = equal_time({"ours": ours_renderer, "mitsuba": mitsuba}, args.seconds, PASSES)
     ours, theirs = images["ours"], images["mitsuba"]
+    warn_reference(reference, images.values())
     noise_y, noise_xyz = reference_noise(reference, 1), reference_noise(reference, None)
     result = {"spec": spec, "reference": reference, "ours": ours, "mitsuba": theirs, "setup_mi": setup_mi}
     for name, image in (("ours", ours), ("mitsuba", theirs)):

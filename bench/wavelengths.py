@@ -20,7 +20,7 @@ Target: ours ≥ 3× lower equal-time colour error than the report's method.
 Scenes: "cloud" (the benchmark cloud, flat medium spectra, g 0.6) and "chromatic" (the same cloud with
 extinction, albedo and anisotropy varying with wavelength, where spectral MIS matters).
 
-    python -m bench.wavelengths             # both scenes, 128³, 256×256, reference 4096 spp, 10 s per method
+    python -m bench.wavelengths             # both scenes, 128³, 256×256, reference 512 spp, 10 s per method
     python -m bench.wavelengths --quick     # tiny: proves it runs
 """
 
@@ -29,7 +29,7 @@ import argparse
 import numpy as np
 
 from bench.measure import (OurRenderer, at_time, compile_timed, corrected_mse, equal_time, machine, mean_delta_e,
-                           reference_noise, render_ours, warm_up, white_for)
+                           reference_noise, render_ours, warm_up, warn_reference, white_for)
 from bench.scenes import CloudSpec, cloud_density, cloud_scene
 
 REPORT = {"wavelengths_per_path": 1, "wavelength_sampling": "uniform", "lambda_min": 380.0, "lambda_max": 700.0}
@@ -54,7 +54,7 @@ def parse(argv=None):
     parser.add_argument("--resolution", type=int, help="grid resolution (default 128)")
     parser.add_argument("--width", type=int, help="image width (default 256)")
     parser.add_argument("--height", type=int, help="image height (default 256)")
-    parser.add_argument("--reference-spp", type=int, help="samples per pixel of the reference (default 4096)")
+    parser.add_argument("--reference-spp", type=int, help="samples per pixel of the reference (default 512; quick 256)")
     parser.add_argument("--seconds", type=float, help="wall-clock budget per method and scene (default 10)")
     parser.add_argument("--ablation", action="store_true", help="also 'ours 1λ' and '4λ uniform'")
     parser.add_argument("--threads", type=int, help="Numba threads (default: all)")
@@ -63,7 +63,7 @@ def parse(argv=None):
     args.resolution = args.resolution or (64 if quick else 128)
     args.width = args.width or (48 if quick else 256)
     args.height = args.height or (48 if quick else 256)
-    args.reference_spp = args.reference_spp or (256 if quick else 4096)
+    args.reference_spp = args.reference_spp or (256 if quick else 512)
     args.seconds = args.seconds or (2.0 if quick else 10.0)
     return args
 
@@ -78,6 +78,7 @@ def run_scene(name: str, density, args) -> dict:
         renderers[method] = OurRenderer(kernel_scene, seed=100 + index)
     reference = render_ours(renderers["ours"].kernel_scene, args.reference_spp, seed=1000)
     images = equal_time(renderers, args.seconds)
+    warn_reference(reference, images.values())
     noise = reference_noise(reference, None)
     white = white_for(reference)
     print(f"\n{spec.label()}: reference = ours at {reference.spp} spp ({reference.seconds:.1f} s); "
