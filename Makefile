@@ -9,7 +9,7 @@ STAMP     := $(VENV)/.installed
 BOOT_PY   ?= $(shell if PYENV_VERSION=3.13.0 python3.13 --version >/dev/null 2>&1; \
                 then echo "env PYENV_VERSION=3.13.0 python3.13"; else echo python3.13; fi)
 
-.PHONY: setup demo test test-fast extension clean
+.PHONY: setup demo test test-fast extension bench clean
 
 setup: $(STAMP)
 
@@ -30,6 +30,16 @@ test-fast: setup
 
 extension: setup
 	$(PY) tools/build_extension.py --out dist
+
+# Benchmarks print figures (bench/README.md); BENCH_ARGS=--quick runs them small. Mitsuba's LLVM
+# backend (Dr.Jit 1.5) needs libLLVM >= 19: Debian's libllvm19 is installed when none is found.
+BENCH_ARGS ?=
+bench: setup
+	@ls /usr/lib/*/libLLVM* 2>/dev/null | grep -qE 'libLLVM(-|\.so\.)(19|[2-9][0-9])' \
+		|| { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19; }
+	$(PY) -m bench.throughput $(BENCH_ARGS)
+	$(PY) -m bench.vs_mitsuba --check $(BENCH_ARGS)
+	$(PY) -m bench.wavelengths $(BENCH_ARGS)
 
 clean:
 	rm -rf dist out .pytest_cache

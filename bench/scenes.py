@@ -1,0 +1,136 @@
+"""The benchmark scenes, built in code and shared by every script in bench/.
+
+One family of scenes (issue 3, Performance): the procedural heterogeneous cloud of
+`addon.tracer.procedural.cloud_grid` (edge 2 world units, at the origin), single-scattering albedo 0.8,
+Henyey–Greenstein anisotropy g, lit by a D65 sun and a constant equal-energy environment, seen by a 40°
+perspective camera. The sun is a delta light (angle 0) so that Mitsuba's `directional` emitter is the
+same light. `chromatic=True` makes extinction, albedo and anisotropy vary with wavelength (the seminar
+report's Rayleigh-like setting: g rising towards the red), for the colour benchmark.
+
+Grids of 256³ and more take minutes and gigabytes of temporaries to generate, so `cloud_density` keeps
+every grid it made as a .npy file in a cache folder (default out/bench-cache/, ignored by git).
+"""
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from addon.tracer import spectra
+from addon.tracer.procedural import cloud_grid
+from addon.tracer.scene import Camera, Grid, Light, Medium, RenderSettings, Scene
+from addon.tracer.wavelengths import GRID
+
+ROOT = Path(__file__).resolve().parent.parent
+CACHE = ROOT / "out" / "bench-cache"
+
+CLOUD_SIZE = 2.0  # world units, edge of the grid's cube
+CLOUD_SEED = 7
+SUN_DIRECTION = (0.5, -0.4, 0.75)  # towards the sun
+EYE, TARGET = (0.0, -3.6, 0.5), (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class CloudSpec:
+    """Everything that varies between benchmark scenes (defaults: issue 3's settings)."""
+
+    resolution: int = 64
+    g: float = 0.0
+    albedo: float = 0.8
+    density_scale: float = 30.0  # σ_t = 30 per world unit where the density is 1
+    width: int = 256
+    height: int = 256
+    fov_degrees: float = 40.0
+    sun_strength: float = 3.0  # irradiance luminance Y on a plane facing the sun
+    environment_strength: float = 0.5  # radiance luminance Y
+    chromatic: bool = False
+
+    def label(self) -> str:
+        kind = "chromatic" if self.chromatic else f"g={self.g:g}"
+        return f"cloud {self.resolution}³ {kind} {self.width}×{self.height}"
+
+    def with_(self, **changes) -> "CloudSpec":
+        return replace(self, **changes)
+
+
+def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """Blender camera matrix (looks along its local −z, +y up) at `eye`, looking at `target`."""
+    eye, target, up = (np.asarray(v, dtype=np.float64) for v in (eye, target, up))
+    back = eye - target
+    back /= np.linalg.norm(back)
+    right = np.cross(up, back)
+    right /= np.linalg.norm(right)
+    matrix = np.eye(4)
+    matrix[:3, 0], matrix[:3, 1], matrix[:3, 2], matrix[:3, 3] = right, np.cross(back, right), back, eye
+    return matrix
+
+
+def cloud_transform(resolution: int) -> np.ndarray:
+    """Index-to-world matrix of the cloud grid: `procedural.cloud_grid`'s cube of edge CLOUD_SIZE."""
+    step = CLOUD_SIZE / resolution
+    index_to_world = np.diag([step, step, step, 1.0])
+    index_to_world[:3, 3] = -CLOUD_SIZE / 2 + 0.5 * step
+    return index_to_world
+
+
+def cloud_density(resolution: int, cache: Path | None = CACHE) -> tuple[Grid, bool]:
+    """`procedural.cloud_grid(resolution, CLOUD_SIZE, seed=CLOUD_SEED)` and whether it came from the cache
+    folder `cache` (None: no cache)."""
+    path = None if cache is None else Path(cache) / f"cloud-{resolution}-seed{CLOUD_SEED}.npy"
+    if path is not None and path.exists():
+        values = np.load(path)
+        if values.shape == (resolution,) * 3 and values.dtype == np.float32:
+            return Grid(values, cloud_transform(resolution), name="density"), True
+    grid = cloud_grid(resolution=resolution, size=CLOUD_SIZE, seed=CLOUD_SEED)
+    assert np.allclose(grid.index_to_world, cloud_transform(resolution))
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.save(path, grid.values)
+    return grid, False
+
+
+def _smooth(lo_value: float, hi_value: float) -> spectra.Spectrum:
+    """A spectrum varying smoothly from `lo_value` at 380 nm to `hi_value` at 700 nm (flat beyond)."""
+    t = np.clip((GRID - 380.0) / 320.0, 0.0, 1.0)
+    return spectra.Spectrum(lo_value + (hi_value - lo_value) * (3 * t**2 - 2 * t**3))
+
+
+def cloud_medium(spec: CloudSpec, density: Grid) -> Medium:
+    if spec.chromatic:
+        extinction, albedo, anisotropy = _smooth(1.4, 0.7), _smooth(0.6, 0.95), _smooth(0.0, 0.8)
+    else:
+        extinction = spectra.constant(1.0)
+        albedo, anisotropy = spectra.constant(spec.albedo), spectra.constant(spec.g)
+    return Medium(name="cloud", density=density, density_scale=spec.density_scale, extinction=extinction,
+                  albedo_densities=np.array([0.0]), albedo_table=albedo.values[None, :], anisotropy=anisotropy)
+
+
+def lights(spec: CloudSpec) -> tuple[Light, ...]:
+    direction = np.asarray(SUN_DIRECTION, dtype=np.float64)
+    sun = Light(kind="sun", spectrum=spectra.illuminant("D65"), strength=spec.sun_strength,
+                direction=direction / np.linalg.norm(direction), angle=0.0, name="sun")
+    sky = Light(kind="environment", spectrum=spectra.constant(1.0), strength=spec.environment_strength,
+                name="environment")
+    return tuple(light for light in (sun, sky) if light.strength > 0)
+
+
+def camera(spec: CloudSpec) -> Camera:
+    return Camera(to_world=look_at(EYE, TARGET), width=spec.width, height=spec.height,
+                  fov=np.radians(spec.fov_degrees))
+
+
+def cloud_scene(spec: CloudSpec, density: Grid | None = None, **settings) -> Scene:
+    """The benchmark scene for `spec`; `settings` are RenderSettings fields (wavelengths_per_path, …)."""
+    if density is None:
+        density, _ = cloud_density(spec.resolution)
+    return Scene(camera=camera(spec), media=(cloud_medium(spec, density),), lights=lights(spec),
+                 settings=RenderSettings(**settings))
+
+
+def orientation_grid(cells: int = 8) -> Grid:
+    """An asymmetric grid for orientation checks: a dense slab near −x, +y, +z corner, thinner
+    elsewhere, so that a swap or flip of any axis moves its image."""
+    values = np.zeros((cells,) * 3, dtype=np.float32)
+    values[1:cells // 3 + 1, cells // 2:cells - 1, cells // 2 + 1:cells - 1] = 1.0
+    values[cells // 2:cells - 1, 1:cells // 4 + 1, 1:cells // 2] = 0.3
+    return Grid(values, cloud_transform(cells), name="density")
