@@ -89,8 +89,11 @@ def _world_to_padded(grid: Grid) -> np.ndarray:
 
 
 def _flatten(arrays):
+    """The grids back to back in one float32 array (a single C-contiguous float32 grid is not copied:
+    at 512³ a copy is 0.5 GiB), with each grid's offset and shape."""
     offsets = np.cumsum([0] + [a.size for a in arrays[:-1]]).astype(np.int64) if arrays else np.zeros(0, np.int64)
-    data = np.concatenate([a.ravel() for a in arrays]).astype(np.float32) if arrays else np.zeros(1, np.float32)
+    flat = [np.ascontiguousarray(a, dtype=np.float32).ravel() for a in arrays]
+    data = (flat[0] if len(flat) == 1 else np.concatenate(flat)) if flat else np.zeros(1, np.float32)
     shapes = np.array([a.shape for a in arrays], dtype=np.int64).reshape(-1, 3)
     return data, offsets, shapes
 
@@ -151,8 +154,7 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
         temperatures.append(np.asarray(emission.temperature.values, dtype=np.float32))
         out["temperature_world_to_padded"][index] = _world_to_padded(emission.temperature)
         out["temperature_map"][index] = (emission.temperature_scale, emission.temperature_offset, emission.intensity)
-    out["temperature_data"] = (np.concatenate([t.ravel() for t in temperatures]) if temperatures
-                               else np.zeros(1, np.float32))
+    out["temperature_data"] = _flatten(temperatures)[0]
     out["temperature_shape"] = np.zeros((count, 3), dtype=np.int64)
     for index, medium in enumerate(media):
         if medium.emission is not None:
