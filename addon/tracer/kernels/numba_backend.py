@@ -7,8 +7,9 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   the hero, as in the null-scattering path integral of Miller et al. 2019) keeps chromatic
   extinction, albedo and anisotropy unbiased.
 - Free flight by delta tracking against a wavelength-independent majorant σ̄ read from each medium's
-  majorant grid (a DDA over coarse blocks); at a tentative collision the hero picks absorption,
-  scattering, fluorescent in-scattering or a null collision in proportion to its coefficients.
+  majorant grid (a DDA over coarse blocks); at a tentative collision the hero picks a real collision
+  (scattering weighted by the albedo), fluorescent in-scattering or a null collision in proportion
+  to its coefficients.
 - Fluorescence is traced backwards: the camera wavelength λ_out switches to an excitation wavelength
   λ_in drawn ∝ excitation(λ_in); only the hero continues (companions are dropped, their MIS share
   goes to the hero).
@@ -112,7 +113,7 @@ def _trilinear(data, offset, nx, ny, nz, x, y, z):
     return total
 
 
-@njit
+@njit(inline="always")
 def _density(ks, m, px, py, pz):
     qx, qy, qz = _transform_point(ks.world_to_padded[m], px, py, pz)
     shape = ks.density_shape[m]
@@ -120,7 +121,7 @@ def _density(ks, m, px, py, pz):
                       qx - 1.0, qy - 1.0, qz - 1.0)
 
 
-@njit
+@njit(inline="always")
 def _temperature(ks, m, px, py, pz):
     qx, qy, qz = _transform_point(ks.temperature_world_to_padded[m], px, py, pz)
     shape = ks.temperature_shape[m]
@@ -129,7 +130,7 @@ def _temperature(ks, m, px, py, pz):
     return raw * ks.temperature_map[m, 0] + ks.temperature_map[m, 1]
 
 
-@njit
+@njit(inline="always")
 def _albedo(ks, m, density, lam):
     count = ks.albedo_count[m]
     levels = ks.albedo_densities[m]
@@ -158,7 +159,7 @@ def _fill_spectral_cache(ks, lams, n, spec):
             spec[m, SPEC_ALBEDO, i] = _table(ks.albedo_table[m, 0], lam)
 
 
-@njit
+@njit(inline="always")
 def _coefficients(ks, px, py, pz, lams, spec, n, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
     """Medium coefficients at a point for each path wavelength (summed over media), per-medium
     scattering / fluorescence coefficients (for choosing which medium scatters), and emission."""
@@ -223,7 +224,7 @@ def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, state_i, state_f):
         state_f[m, 14], state_f[m, 15], state_f[m, 16] = ldx, ldy, ldz
 
 
-@njit
+@njit(inline="always")
 def _tracker_enter(ks, m, state_i, state_f):
     t = state_f[m, 0]
     block = ks.majorant_block[m]
@@ -249,7 +250,7 @@ def _tracker_enter(ks, m, state_i, state_f):
     state_i[m, 0] = 1
 
 
-@njit
+@njit(inline="always")
 def _tracker_boundary(state_i, state_f, m):
     """The ray parameter where medium m's current majorant changes next."""
     phase = state_i[m, 0]
@@ -260,7 +261,7 @@ def _tracker_boundary(state_i, state_f, m):
     return INF
 
 
-@njit
+@njit(inline="always")
 def _tracker_segment(ks, state_i, state_f):
     """(end of the current segment, combined majorant σ̄ on it)."""
     t_end = INF
@@ -274,7 +275,7 @@ def _tracker_segment(ks, state_i, state_f):
     return t_end, sigma
 
 
-@njit
+@njit(inline="always")
 def _tracker_advance(ks, state_i, state_f, t_end):
     """Move every medium whose boundary is at `t_end` into its next block (or out)."""
     for m in range(ks.density_scale.shape[0]):
@@ -298,7 +299,7 @@ def _tracker_advance(ks, state_i, state_f, t_end):
             state_i[m, 0] = 2
 
 
-@njit
+@njit(inline="always")
 def _tentative_collision(ks, stream, state_i, state_f, t):
     """Delta tracking from ray parameter t: the next tentative collision (t, σ̄ there), or (INF, 0)
     when the ray leaves every medium (or passes the tracker's t_max)."""
@@ -576,15 +577,17 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, 
             total = sigma_bar + sigma_fl[0]
             sigma_n0 = max(0.0, sigma_bar - sigma_a[0] - sigma_s[0])
             choice = _next(stream) * total
-            if choice < sigma_a[0]:
-                event = EVENT_ABSORB
-                break
             if choice < sigma_a[0] + sigma_s[0]:
-                probability0 = sigma_s[0] / total
+                # A real collision scatters, weighted by the albedo: absorption lowers the throughput
+                # instead of ending the path (Russian roulette ends faint paths).
+                probability0 = (sigma_a[0] + sigma_s[0]) / total
+                alive = False
                 for i in range(n):
                     beta[i] *= sigma_s[i] / sigma_bar / probability0
-                    r_u[i] *= sigma_s[i] / (sigma_bar + sigma_fl[i]) / probability0
-                event = EVENT_SCATTER
+                    r_u[i] *= (sigma_a[i] + sigma_s[i]) / (sigma_bar + sigma_fl[i]) / probability0
+                    if beta[i] > 0.0:
+                        alive = True
+                event = EVENT_SCATTER if alive else EVENT_ABSORB
                 break
             if choice < sigma_a[0] + sigma_s[0] + sigma_fl[0]:
                 event = EVENT_FLUORESCE

@@ -499,18 +499,21 @@ def _free_flight(ks, paths, radiance):
         total = sigma_bar + c.sigma_fl[:, 0]
         sigma_n = np.maximum(0.0, bar - c.sigma_a - c.sigma_s)
         choice = _draw(paths, rows) * total
-        absorbed = choice < c.sigma_a[:, 0]
-        scattered = ~absorbed & (choice < c.sigma_a[:, 0] + c.sigma_s[:, 0])
-        fluoresced = ~absorbed & ~scattered & (choice < c.sigma_a[:, 0] + c.sigma_s[:, 0] + c.sigma_fl[:, 0])
-        null = ~(absorbed | scattered | fluoresced)
-        p0 = np.where(scattered, c.sigma_s[:, 0], sigma_n[:, 0])[:, None] / total[:, None]
-        beta = np.where(scattered[:, None], beta * (c.sigma_s / bar / p0), beta)
-        r_u = np.where(scattered[:, None], r_u * (c.sigma_s / (bar + c.sigma_fl) / p0), r_u)
+        sigma_t = c.sigma_a + c.sigma_s
+        # A real collision scatters, weighted by the albedo (as in the Numba kernel).
+        collided = choice < sigma_t[:, 0]
+        fluoresced = ~collided & (choice < sigma_t[:, 0] + c.sigma_fl[:, 0])
+        null = ~(collided | fluoresced)
+        p0 = np.where(collided, sigma_t[:, 0], sigma_n[:, 0])[:, None] / total[:, None]
+        beta = np.where(collided[:, None], beta * (c.sigma_s / bar / p0), beta)
+        r_u = np.where(collided[:, None], r_u * (sigma_t / (bar + c.sigma_fl) / p0), r_u)
         beta = np.where(null[:, None], beta * (sigma_n / bar / p0), beta)
         r_u = np.where(null[:, None], r_u * (sigma_n / (bar + c.sigma_fl) / p0), r_u)
         r_l = np.where(null[:, None], r_l / p0, r_l)
         paths.beta[rows], paths.r_u[rows], paths.r_l[rows] = beta, r_u, r_l
-        dead = null & ~np.any(beta > 0.0, axis=1)
+        alive = np.any(beta > 0.0, axis=1)
+        dead = null & ~alive
+        scattered = collided & alive
         event = np.where(scattered, EVENT_SCATTER, np.where(fluoresced, EVENT_FLUORESCE, EVENT_ABSORB))
         stop = ~null | dead
         real = scattered | fluoresced
