@@ -1,5 +1,5 @@
-"""Modified copies of the Numba kernel, for measurements the real kernel cannot make (counting.py) and
-for what-if timings of changes to it (variants.py). The tracer's own files are never touched.
+"""Modified copies of the Numba kernel, for measurements the real kernel cannot make (counting.py).
+The tracer's own files are never touched.
 
 A copy is `addon/tracer/kernels/numba_backend.py`'s source with textual replacements (each must match,
 or the copy is refused: the kernel changed and the benchmark needs updating) and extra source appended.
@@ -72,9 +72,3 @@ class CopyRenderer:
             self.next_sample += size
         return Image(film.xyz, film.variance, spp, seconds)
 
-
-def compile_copy(module, kernel_scene) -> float:
-    """Compile (or load from cache) a copy's kernel with a 1-sample 2×2 render; seconds taken."""
-    start = time.perf_counter()
-    CopyRenderer(module, kernel_scene._replace(width=2, height=2), 0).render(1)
-    return time.perf_counter() - start

@@ -17,7 +17,6 @@ units alone (sun only, environment only).
 
     python -m bench.vs_mitsuba                 # 64³ and 128³, g 0 and 0.6, 256×256, 10 s per renderer
     python -m bench.vs_mitsuba --quick --check # small and short: proves it runs
-    python -m bench.vs_mitsuba --ours-variant inline+albedo   # what the proposed kernel changes would give
 """
 
 import argparse
@@ -28,9 +27,7 @@ import numpy as np
 from bench.measure import (Image, OurRenderer, at_time, compile_timed, corrected_mse, efficiency, equal_time, machine,
                            reference_noise, render_ours, rmse, warn_reference, warm_up)
 from bench.mitsuba_scene import BLENDER_TO_MITSUBA_CAMERA, load_mitsuba, scene_dict, volume_data
-from bench.kernel_copy import CopyRenderer, compile_copy, kernel_copy
-from bench.scenes import CACHE, CloudSpec, cloud_density, cloud_scene, orientation_grid
-from bench.variants import VARIANTS
+from bench.scenes import CloudSpec, cloud_density, cloud_scene, orientation_grid
 
 PASSES = 4  # interleaved passes per renderer in an equal-time render
 CHUNK = 4  # samples per pixel in each call of mi.render
@@ -51,8 +48,6 @@ def parse(argv=None):
     parser.add_argument("--integrator", default="volpath", choices=["volpath", "volpathmis"],
                         help="Mitsuba integrator (default volpath)")
     parser.add_argument("--threads", type=int, help="threads for both renderers (default: all cores)")
-    parser.add_argument("--ours-variant", choices=list(VARIANTS), help="time a what-if copy of our kernel "
-                        "(bench/variants.py) instead of the real one; the reference stays the real kernel's")
     args = parser.parse_args(argv)
     quick = args.quick
     args.resolutions = args.resolutions or ([64] if quick else [64, 128])
@@ -160,12 +155,7 @@ def compare(spec: CloudSpec, density, mi, args) -> dict:
     mitsuba.render(CHUNK)  # Dr.Jit compiles (or loads from ~/.drjit) its kernels here
     setup_mi = time.perf_counter() - start
     reference = render_ours(kernel_scene, args.reference_spp, seed=1000)
-    if args.ours_variant:
-        module = kernel_copy(args.ours_variant.replace("+", "_"), CACHE, VARIANTS[args.ours_variant]())
-        compile_copy(module, kernel_scene)
-        ours_renderer = CopyRenderer(module, kernel_scene, seed=12)
-    else:
-        ours_renderer = OurRenderer(kernel_scene, seed=12)
+    ours_renderer = OurRenderer(kernel_scene, seed=12)
     images = equal_time({"ours": ours_renderer, "mitsuba": mitsuba}, args.seconds, PASSES)
     ours, theirs = images["ours"], images["mitsuba"]
     warn_reference(reference, images.values())
@@ -216,8 +206,6 @@ def main(argv=None) -> int:
         dr.set_thread_count(args.threads)
     print(f"machine: {machine()}; Dr.Jit {dr.__version__} with {dr.thread_count()} threads, Mitsuba {mi.__version__} "
           f"{mi.variant()}")
-    if args.ours_variant:
-        print(f"OURS IS THE WHAT-IF KERNEL COPY {args.ours_variant!r} (bench/variants.py), not the tracer's kernel")
     print(f"ours: 4 wavelengths per path (hero + spectral MIS, visible-importance λ), majorant grid; Mitsuba: "
           f"{args.integrator}, 4 wavelengths per path, one majorant for the whole medium"
           + ("\n[QUICK MODE: tiny sizes and budgets, figures are not representative]" if args.quick else ""))
