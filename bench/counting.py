@@ -44,11 +44,11 @@ def _density(ks, m, px, py, pz):
 
 
 @njit
-def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, n, stream, transmittance, null_ratio,
+def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance, null_ratio,
                    state_i, state_f, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
     ks.bench_counters[_bench_thread_id() * 8 + 1] += 1
-    _transmittance_uncounted(ks, ox, oy, oz, dx, dy, dz, t_max, lams, n, stream, transmittance, null_ratio,
-                             state_i, state_f, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
+    _transmittance_uncounted(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance,
+                             null_ratio, state_i, state_f, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
 
 
 @njit
@@ -58,7 +58,10 @@ def _tracker_advance(ks, state_i, state_f, t_end):
 '''
 
 CountingScene = namedtuple("CountingScene", KernelScene._fields + ("bench_counters",))
-_CHECKED = ("def _density(", "def _transmittance(", "def _tracker_advance(")
+# The definition lines the wrappers mirror: a changed signature refuses the copy instead of failing to compile.
+_CHECKED = ("def _density(ks, m, px, py, pz):",
+            "def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance, null_ratio,",
+            "def _tracker_advance(ks, state_i, state_f, t_end):")
 
 
 def counting_backend(folder: Path):

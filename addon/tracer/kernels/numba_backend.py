@@ -145,7 +145,7 @@ def _albedo(ks, m, density, lam):
     return (1.0 - t) * _table(ks.albedo_table[m, upper - 1], lam) + t * _table(ks.albedo_table[m, upper], lam)
 
 
-@njit
+@njit(inline="always")
 def _fill_spectral_cache(ks, lams, n, spec):
     """Tabulated spectra of every medium at the path's current wavelengths (looked up once per path
     and after a fluorescent wavelength change, instead of at every collision)."""
@@ -192,7 +192,7 @@ def _coefficients(ks, px, py, pz, lams, spec, n, sigma_a, sigma_s, sigma_fl, emi
 
 # ----------------------------------------------------------------------------- majorant tracking
 
-@njit
+@njit(inline="always")
 def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, state_i, state_f):
     """Initialise one DDA per medium over its majorant blocks, in padded index space.
 
@@ -317,14 +317,14 @@ def _tentative_collision(ks, stream, state_i, state_f, t):
 
 # ----------------------------------------------------------------------------- phase functions
 
-@njit
+@njit(inline="always")
 def _phase_pdf(ks, m, g, cos_theta):
     if ks.phase_kind[m] == PHASE_RAYLEIGH:
         return rayleigh_pdf(cos_theta)
     return hg_pdf(g, cos_theta)
 
 
-@njit
+@njit(inline="always")
 def _mixture_phase(ks, medium_s, spec, n, cos_theta, out):
     """Phase pdf (= value) at each wavelength: the σ_s-weighted mixture of the media's phases."""
     for i in range(n):
@@ -337,7 +337,7 @@ def _mixture_phase(ks, medium_s, spec, n, cos_theta, out):
         out[i] = weighted / total if total > 0.0 else 0.0
 
 
-@njit
+@njit(inline="always")
 def _pick_medium(weights, i, u):
     total = 0.0
     for m in range(weights.shape[0]):
@@ -352,18 +352,18 @@ def _pick_medium(weights, i, u):
 
 # ----------------------------------------------------------------------------- lights
 
-@njit
+@njit(inline="always")
 def _sky_radiance(ks, light, lam, dz):
     t = min(max(dz, 0.0), 1.0)
     return t * _table(ks.light_spd[light], lam) + (1.0 - t) * _table(ks.light_spd_horizon[light], lam)
 
 
-@njit
+@njit(inline="always")
 def _sun_solid_angle(ks, light):
     return 2.0 * math.pi * (1.0 - ks.light_cos[light])
 
 
-@njit
+@njit(inline="always")
 def _infinite_radiance(ks, light, lam, dx, dy, dz):
     """Radiance of a non-delta infinite light seen along direction (dx, dy, dz) (0 for others)."""
     kind = ks.light_kind[light]
@@ -379,7 +379,7 @@ def _infinite_radiance(ks, light, lam, dx, dy, dz):
     return 0.0
 
 
-@njit
+@njit(inline="always")
 def _infinite_pdf(ks, light, dx, dy, dz):
     """Solid-angle pdf of `_sample_light` producing this direction for a non-delta infinite light."""
     kind = ks.light_kind[light]
@@ -392,7 +392,7 @@ def _infinite_pdf(ks, light, dx, dy, dz):
     return 0.0
 
 
-@njit
+@njit(inline="always")
 def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
     """Direction to the light, its solid-angle pdf (1 for delta lights), distance, delta flag;
     fills `radiance` with the incident radiance (irradiance / intensity / d² for delta lights)."""
@@ -447,7 +447,7 @@ def _medium_scratch_fl(medium_fl):
     return medium_fl[:, MAX_LAMBDAS:]
 
 
-@njit
+@njit(inline="always")
 def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance, null_ratio,
                    state_i, state_f, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
     """Ratio tracking along a shadow ray: fills `transmittance` (per λ) and `null_ratio`, the product
@@ -481,7 +481,7 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, tra
                 transmittance[i] /= 1.0 - SHADOW_ROULETTE_STOP
 
 
-@njit
+@njit(inline="always")
 def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, spec, n, stream, beta, r_u, radiance,
                 scratch, medium_s, medium_fl, state_i, state_f):
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
