@@ -17,6 +17,7 @@ from addon.tracer.scene import Camera, Grid, Light
 from addon.tracer.wavelengths import LAMBDA_STEP
 
 D65_WHITE_XY = (0.3127, 0.3290)
+NEUTRAL = 0.004  # colours this close to the white in xy have no hue or dominant wavelength (NaN)
 EQUAL_ENERGY_XY = (1.0 / 3.0, 1.0 / 3.0)
 
 # ----------------------------------------------------------------------------- pixels and regions
@@ -122,7 +123,7 @@ def describe(xyz, white_xyz) -> dict:
     """Chromaticity, LCh hue and dominant wavelength of `xyz`, against `white_xyz`."""
     xy = colorimetry.xyz_to_xy(xyz)
     white_xy = colorimetry.xyz_to_xy(white_xyz)
-    if np.hypot(*(xy - white_xy)) < 1e-4:  # the white itself: no hue, no dominant wavelength
+    if np.hypot(*(xy - white_xy)) < NEUTRAL:  # as good as the white itself: no hue, no dominant wavelength
         hue = dominant = float("nan")
     else:
         hue, dominant = hue_angle(xyz, white_xyz), colorimetry.dominant_wavelength(xy, white_xy)
@@ -130,8 +131,11 @@ def describe(xyz, white_xyz) -> dict:
 
 
 def format_colour(label: str, figures: dict) -> str:
-    return (f"{label:<16} x={figures['x']:.3f} y={figures['y']:.3f}  hue {figures['hue']:5.1f}°  "
-            f"dominant {figures['dominant_nm']:5.0f} nm  Y={figures['Y']:.3g}")
+    if np.isfinite(figures["hue"]):
+        hue = f"hue {figures['hue']:5.1f}°  dominant {figures['dominant_nm']:5.0f} nm"
+    else:
+        hue = "neutral (the white)"
+    return f"{label:<16} x={figures['x']:.3f} y={figures['y']:.3f}  {hue}  Y={figures['Y']:.3g}"
 
 
 # ----------------------------------------------------------------------------- Rayleigh skies

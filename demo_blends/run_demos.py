@@ -42,7 +42,7 @@ class Demo:
 
 
 def _nm(value: float) -> str:
-    return "-" if not np.isfinite(value) else f"{value:.0f} nm"
+    return "white" if not np.isfinite(value) else f"{value:.0f} nm"
 
 
 def _sky_lines(f: dict) -> list[str]:
@@ -85,12 +85,12 @@ def demo_list(pair: metamers.MetamerPair) -> list[Demo]:
         Demo("rayleigh_true", "Rayleigh: 1/lambda^4, Rayleigh phase", scenes.rayleigh_true, 48, metrics.rayleigh,
              _sky_lines, exposure=2.0),
         Demo("fluorescent_frog", "Fluorescent frog, 275-450 nm lamp", scenes.fluorescent_frog, 32, metrics.frog,
-             _frog_lines, exposure=0.5),
+             _frog_lines),
         Demo("fire", "Fire: blackbody 1000-2000 K", scenes.fire, 48, metrics.fire, _fire_lines),
         Demo("metamers_simple_d65", "Report's cubes under D65", scenes.metamerism_simple("D65"), 24, cubes,
-             _cube_lines, exposure=1.5),
+             _cube_lines, exposure=0.5),
         Demo("metamers_simple_lower_half", "Report's cubes, D65 below 570 nm", scenes.metamerism_simple("D65 lower half"),
-             24, cubes, _cube_lines, exposure=1.5),
+             24, cubes, _cube_lines, exposure=0.5),
         Demo("metamers_d65", "Designed metamers under D65", metamers.metamerism_designed(pair, "D65"), 24, cubes,
              _cube_lines, exposure=1.0),
         Demo("metamers_a", "Designed metamers under A", metamers.metamerism_designed(pair, "A"), 24, cubes,

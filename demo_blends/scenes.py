@@ -406,5 +406,5 @@ def fire(width: int, height: int, spp: int) -> Scene:
     plume = medium("smoke", smoke, 6.0, albedo=0.7)
     # A bluish moon from above and behind lights the smoke; the background stays black.
     moon = sun(spectra.blackbody(9000.0), 1.0, elevation=45.0, azimuth=150.0, name="moon")
-    cam = camera((0.0, -4.6, 1.0), (0.0, 0.0, 1.1), width, height, 42.0)
+    cam = camera((0.0, -4.6, 1.0), (0.0, 0.0, 1.0), width, height, 48.0)
     return scene(cam, (flame, plume), (moon,), spp)
