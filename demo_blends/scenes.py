@@ -1,0 +1,410 @@
+"""The demo scenes as tracer `Scene`s, built in code: no files, no downloads.
+
+Each builder takes the image size and samples per pixel and returns a `Scene`; the figures that
+prove each phenomenon are computed from the rendered film by `metrics`. This step builds the demos as
+tracer scenes only: turning them into .blend files through the add-on (issue 6's `*.blend`) is a
+later step, which should reproduce these settings (they are all plain numbers and spectra here).
+
+World conventions: Blender's, z up, lengths in Blender units. Directions to lights are given as
+(elevation, azimuth) in degrees, azimuth measured from +y (the direction the cameras look along)
+towards +x.
+"""
+
+import numpy as np
+
+from addon.tracer import spectra
+from addon.tracer.scene import BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
+from addon.tracer.wavelengths import GRID
+
+# ----------------------------------------------------------------------------- shared helpers
+
+
+def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """Blender camera matrix (looks along local −z, +y up) at `eye` looking at `target`."""
+    eye, target, up = (np.asarray(v, dtype=np.float64) for v in (eye, target, up))
+    back = eye - target
+    back /= np.linalg.norm(back)
+    right = np.cross(up, back)
+    right /= np.linalg.norm(right)
+    matrix = np.eye(4)
+    matrix[:3, 0], matrix[:3, 1], matrix[:3, 2], matrix[:3, 3] = right, np.cross(back, right), back, eye
+    return matrix
+
+
+def camera(eye, target, width: int, height: int, fov_degrees: float) -> Camera:
+    """A perspective camera; `fov_degrees` spans the image's wider axis."""
+    return Camera(to_world=look_at(eye, target), width=width, height=height, fov=np.radians(fov_degrees))
+
+
+def direction(elevation: float, azimuth: float) -> np.ndarray:
+    """Unit vector at `elevation` degrees above the horizon, `azimuth` degrees from +y towards +x."""
+    e, a = np.radians(elevation), np.radians(azimuth)
+    return np.array([np.cos(e) * np.sin(a), np.cos(e) * np.cos(a), np.sin(e)])
+
+
+def cell_centres(cells, lo, hi):
+    """Coordinates (x, y, z as broadcastable arrays) of the centres of `cells` cells filling the box
+    [lo, hi], and the grid's index-to-world matrix."""
+    cells, lo, hi = np.asarray(cells), np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    step = (hi - lo) / cells
+    axes = [lo[i] + (np.arange(cells[i]) + 0.5) * step[i] for i in range(3)]
+    index_to_world = np.diag(np.append(step, 1.0))
+    index_to_world[:3, 3] = lo + 0.5 * step
+    return np.meshgrid(*axes, indexing="ij", sparse=True), index_to_world
+
+
+def sampled_grid(field, cells, lo, hi, name: str = "density") -> Grid:
+    """A grid of `field(x, y, z)` (NumPy-broadcasting) at the centres of `cells` cells filling [lo, hi]."""
+    (x, y, z), index_to_world = cell_centres(cells, lo, hi)
+    values = np.broadcast_to(field(x, y, z), tuple(cells)).astype(np.float32)
+    return Grid(np.ascontiguousarray(values), index_to_world, name=name)
+
+
+def uniform(x, y, z):
+    """Density 1 everywhere (a field for `sampled_grid`)."""
+    return np.ones(np.broadcast_shapes(x.shape, y.shape, z.shape))
+
+
+def as_spectrum(value) -> spectra.Spectrum:
+    return value if isinstance(value, spectra.Spectrum) else spectra.constant(value)
+
+
+def medium(name: str, density: Grid, scale: float, *, extinction=1.0, albedo=1.0, g=0.0, phase: str = "hg",
+           fluorescence=None, emission=None) -> Medium:
+    """A medium whose extinction, albedo (the same at every density) and anisotropy are numbers or spectra."""
+    return Medium(name=name, density=density, density_scale=float(scale), extinction=as_spectrum(extinction),
+                  albedo_densities=np.array([0.0]), albedo_table=as_spectrum(albedo).values[None, :],
+                  anisotropy=as_spectrum(g), phase=phase, fluorescence=fluorescence, emission=emission)
+
+
+def sun(spectrum: spectra.Spectrum, strength: float, elevation: float, azimuth: float = 0.0,
+        angle_degrees: float = 0.0, name: str = "sun") -> Light:
+    """A sun `strength` (irradiance Y) from (elevation, azimuth), with an angular diameter."""
+    return Light(kind="sun", spectrum=spectrum, strength=strength, direction=direction(elevation, azimuth),
+                 angle=np.radians(angle_degrees), name=name)
+
+
+def smooth_step(edge_nm: float, width_nm: float) -> np.ndarray:
+    """0 well below `edge_nm`, 1 well above, a logistic step of about `width_nm` (values on GRID)."""
+    return 1.0 / (1.0 + np.exp(-(GRID - edge_nm) / (0.25 * width_nm)))
+
+
+SEED = 1  # every demo renders with this seed: the same image on every run
+
+
+def scene(cam: Camera, media, lights, spp: int, **settings) -> Scene:
+    return Scene(camera=cam, media=tuple(media), lights=tuple(lights),
+                 settings=RenderSettings(spp=spp, seed=SEED, **settings))
+
+
+# ----------------------------------------------------------------------------- Rayleigh skies
+
+FLAT = spectra.constant(1.0)  # the report's sun: equal energy at every wavelength (not D65)
+ATMOSPHERE_TOP = 1.0  # thickness of the slab of air
+ATMOSPHERE_HALF_WIDTH = 40.0  # wide enough that a sun 4° above the horizon still shines through air
+SUN_ANGLE = 2.0  # degrees; the real sun's is 0.53, four times wider keeps its disc visible at 256 px
+SKY_CAMERA_HEIGHT = 0.06
+
+
+def ground(albedo: float = 0.35) -> Medium:
+    """A dense grey layer below z = 0 standing in for the ground."""
+    w = ATMOSPHERE_HALF_WIDTH
+    grid = sampled_grid(uniform, (4, 4, 4), (-w, -w, -0.2), (w, w, 0.0))
+    return medium("ground", grid, 200.0, albedo=albedo)
+
+
+def atmosphere(name: str, extinction, **optics) -> Medium:
+    """A slab of air from the ground to ATMOSPHERE_TOP, constant density 1, σ_t = extinction(λ)."""
+    w = ATMOSPHERE_HALF_WIDTH
+    grid = sampled_grid(uniform, (8, 8, 32), (-w, -w, 0.0), (w, w, ATMOSPHERE_TOP))
+    return medium(name, grid, 1.0, extinction=extinction, **optics)
+
+
+def sky_camera(width: int, height: int, pitch: float, fov: float = 100.0) -> Camera:
+    """A camera just above the ground looking along +y, tilted `pitch` degrees up."""
+    eye = np.array([0.0, 0.0, SKY_CAMERA_HEIGHT])
+    return camera(eye, eye + direction(pitch, 0.0), width, height, fov)
+
+
+# The report's setup: albedo 0.8 everywhere, g rising from 0 at 380 nm to strongly forward at 700 nm.
+# It rises as a square root, so greens are already fairly forward: a linear rise leaves the sky far from
+# the sun cyan (dominant wavelength 491 nm, hue 205°) instead of blue (485 nm, 233°).
+REPORT_ALBEDO = 0.8
+REPORT_G_MAX = 0.95
+REPORT_TAU = 0.5  # vertical optical depth (the same at every λ)
+REPORT_SUN = dict(elevation=22.0, azimuth=32.0)
+
+
+def report_anisotropy() -> spectra.Spectrum:
+    return spectra.Spectrum(REPORT_G_MAX * np.sqrt(np.clip((GRID - 380.0) / (700.0 - 380.0), 0.0, 1.0)))
+
+
+def rayleigh_report(width: int, height: int, spp: int) -> Scene:
+    """The report's Rayleigh imitation: a flat-spectrum sun through a grey slab whose anisotropy grows
+    with wavelength, so red goes on forward (around the sun) and blue is spread over the sky."""
+    air = atmosphere("air", REPORT_TAU / ATMOSPHERE_TOP, albedo=REPORT_ALBEDO,
+                     g=report_anisotropy())
+    light = sun(FLAT, 5.0, angle_degrees=SUN_ANGLE, **REPORT_SUN)
+    return scene(sky_camera(width, height, pitch=14.0), (air, ground()), (light,), spp)
+
+
+# True Rayleigh: σ_t ∝ λ⁻⁴, Rayleigh phase function, no absorption; a low sun (sunset). Pure Rayleigh
+# air cannot give a deep blue zenith and a red sun at once (a flat slab: zenith radiance ∝
+# e^(−τ) − e^(−mτ) for air mass m, which is pale once τ(450 nm)·m ≳ 1): this optical depth and sun
+# height give a blue upper sky and an orange sun.
+RAYLEIGH_TAU_550 = 0.12  # vertical optical depth at 550 nm (the Earth's is about 0.1)
+RAYLEIGH_SUN = dict(elevation=4.0, azimuth=32.0)
+
+
+def rayleigh_true(width: int, height: int, spp: int) -> Scene:
+    """Air with extinction ∝ λ⁻⁴ and the Rayleigh phase function at sunset: blue overhead, the sun
+    and the sky around it reddened by the long path through the air."""
+    # Only visible light is traced, so the λ⁻⁴ law stops at 360 nm: below it would only raise the majorant.
+    extinction = spectra.Spectrum(np.where(GRID >= 360.0, (550.0 / GRID) ** 4, 0.0) * RAYLEIGH_TAU_550 / ATMOSPHERE_TOP)
+    air = atmosphere("air", extinction, albedo=1.0, phase="rayleigh")
+    light = sun(FLAT, 3.0, angle_degrees=SUN_ANGLE, **RAYLEIGH_SUN)
+    return scene(sky_camera(width, height, pitch=24.0), (air, ground()), (light,), spp)
+
+
+# ----------------------------------------------------------------------------- shapes for procedural volumes
+
+
+def ellipsoid(centre, radii):
+    """Approximate signed distance to an ellipsoid (exact for spheres; negative inside)."""
+    centre, radii = np.asarray(centre, dtype=np.float64), np.asarray(radii, dtype=np.float64)
+
+    def sdf(x, y, z):
+        q = np.sqrt(((x - centre[0]) / radii[0]) ** 2 + ((y - centre[1]) / radii[1]) ** 2
+                    + ((z - centre[2]) / radii[2]) ** 2)
+        return (q - 1.0) * radii.min()
+
+    return sdf
+
+
+def capsule(a, b, radius):
+    """Signed distance to the segment a–b thickened by `radius`."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    axis = b - a
+
+    def sdf(x, y, z):
+        px, py, pz = x - a[0], y - a[1], z - a[2]
+        t = np.clip((px * axis[0] + py * axis[1] + pz * axis[2]) / (axis @ axis), 0.0, 1.0)
+        return np.sqrt((px - t * axis[0]) ** 2 + (py - t * axis[1]) ** 2 + (pz - t * axis[2]) ** 2) - radius
+
+    return sdf
+
+
+def union(*shapes, blend: float = 0.06):
+    """Smooth union of signed distances (polynomial smooth minimum over `blend` world units)."""
+
+    def sdf(x, y, z):
+        distance = shapes[0](x, y, z)
+        for shape in shapes[1:]:
+            other = shape(x, y, z)
+            h = np.clip(0.5 + 0.5 * (other - distance) / blend, 0.0, 1.0)
+            distance = other + (distance - other) * h - blend * h * (1.0 - h)
+        return distance
+
+    return sdf
+
+
+def solid(sdf, edge: float):
+    """Density 1 inside a signed-distance shape, 0 outside, with a smooth edge `edge` world units wide."""
+    return lambda x, y, z: np.clip(0.5 - sdf(x, y, z) / edge, 0.0, 1.0)
+
+
+def both_sides(part):
+    """`part(side)` for side = +1 and −1: a body part and its mirror image across x = 0."""
+    return part(1.0), part(-1.0)
+
+
+# ----------------------------------------------------------------------------- fluorescent frog
+
+# The lamp: only 275–450 nm (UV plus violet), as in the report.
+UV_LAMP = spectra.window(spectra.constant(1.0), 275.0, 450.0)
+# The fluorophore absorbs UV (and a little violet) and re-emits green around 540 nm.
+FROG_EXCITATION = spectra.Spectrum(spectra.gaussian(340.0, 20.0).values * (1.0 - smooth_step(410.0, 20.0)))
+FROG_EMISSION = spectra.gaussian(540.0, 30.0)
+FROG_QUANTUM_YIELD = 0.5
+# Fluorophore density: optical depth 8 per unit at the excitation peak, so UV is absorbed in a skin a
+# tenth of a unit thick. Kept this low on purpose: the kernel traces fluorescence from the camera as a
+# null-collision event whose weights grow like exp(∫σ_fl ds) along the ray (σ_fl here ≈ 2.7 per
+# unit); at 20 per unit the frog's far side is missed in practice (estimates 20–35 % low and
+# direction dependent, although unbiased in expectation).
+FROG_DENSITY = 8.0
+FROG_BOX = ((-1.3, -1.25, 0.0), (1.3, 1.45, 1.15))
+EYES = ((0.27, 0.72, 0.86), (-0.27, 0.72, 0.86))
+
+
+def frog_shape():
+    """A sitting frog facing +y, about 2.6 units long, from ellipsoids and capsules (signed distance)."""
+    body = ellipsoid((0.0, -0.15, 0.42), (0.55, 0.78, 0.38))
+    head = ellipsoid((0.0, 0.62, 0.58), (0.5, 0.42, 0.3))
+    eyes = [ellipsoid(eye, (0.14, 0.14, 0.13)) for eye in EYES]
+    arms = both_sides(lambda s: capsule((s * 0.35, 0.35, 0.36), (s * 0.55, 0.6, 0.06), 0.09))
+    hands = both_sides(lambda s: ellipsoid((s * 0.6, 0.72, 0.04), (0.16, 0.14, 0.04)))
+    thighs = both_sides(lambda s: capsule((s * 0.42, -0.55, 0.32), (s * 0.88, -0.1, 0.28), 0.17))
+    shins = both_sides(lambda s: capsule((s * 0.88, -0.1, 0.28), (s * 0.72, -0.78, 0.1), 0.12))
+    feet = both_sides(lambda s: capsule((s * 0.72, -0.78, 0.05), (s * 1.08, -0.25, 0.04), 0.07))
+    return union(body, head, *eyes, *arms, *hands, *thighs, *shins, *feet)
+
+
+def frog_medium(cells=(96, 100, 44)) -> Medium:
+    """The frog's body: a fluorophore and nothing else, so it is transparent to visible light and every
+    bit of light it sends out is fluorescence."""
+    grid = sampled_grid(solid(frog_shape(), edge=0.04), cells, *FROG_BOX)
+    fluorescence = Fluorescence(excitation=FROG_EXCITATION, emission=FROG_EMISSION,
+                                quantum_yield=FROG_QUANTUM_YIELD)
+    return medium("frog", grid, FROG_DENSITY, extinction=0.0, albedo=0.0, fluorescence=fluorescence)
+
+
+def frog_pupils() -> Medium:
+    """Black pupils at the front of the eyes (they absorb everything; not fluorescent)."""
+    pupils = union(*(ellipsoid(np.add(eye, (0.0, 0.09, 0.01)), (0.075, 0.06, 0.075)) for eye in EYES))
+    grid = sampled_grid(solid(pupils, edge=0.02), (48, 16, 16), (-0.45, 0.72, 0.75), (0.45, 0.92, 1.0))
+    return medium("pupils", grid, 200.0, albedo=0.0)
+
+
+def lily_pad() -> Medium:
+    """A white, non-fluorescent disc under the frog: it shows the colour of the lamp."""
+    pad = solid(lambda x, y, z: np.maximum(np.hypot(x, y - 0.05) - 1.7, np.abs(z + 0.07) - 0.07), edge=0.03)
+    grid = sampled_grid(pad, (72, 72, 6), (-1.8, -1.75, -0.16), (1.8, 1.85, 0.02))
+    return medium("pad", grid, 40.0, albedo=0.5)
+
+
+def fluorescent_frog(width: int, height: int, spp: int) -> Scene:
+    """A frog lit by a UV/violet lamp glows green: the green comes only from fluorescence."""
+    # Strengths are luminances (Y), and violet has very little: Y = 0.04 is already a bright violet.
+    lamp = sun(UV_LAMP, 0.05, elevation=45.0, azimuth=-30.0, name="UV lamp")
+    fill = Light(kind="environment", spectrum=UV_LAMP, strength=0.001, name="UV fill")
+    cam = camera((-2.4, 4.6, 2.3), (0.0, 0.05, 0.35), width, height, 42.0)
+    return scene(cam, (frog_medium(), lily_pad(), frog_pupils()), (lamp, fill), spp)
+
+
+def fibonacci_directions(count: int) -> np.ndarray:
+    """`count` unit vectors spread evenly over the sphere (equal-area Fibonacci lattice)."""
+    k = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * k / count
+    phi = np.pi * (1.0 + np.sqrt(5.0)) * k
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+
+
+FROG_ENERGY_LAMP = sun(UV_LAMP, 0.05, elevation=90.0, name="UV lamp overhead")  # no angle: never seen
+
+
+def frog_energy_views(size: int, spp: int, views: int = 16) -> list[Scene]:
+    """The frog's body alone under a lamp straight above it, seen by orthographic cameras from
+    `views` directions over the whole sphere, each framing all of it: what `metrics.frog_energy`
+    integrates into the power the frog sends out."""
+    lo, hi = np.array(FROG_BOX[0]), np.array(FROG_BOX[1])
+    centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
+    cameras = []
+    for view in fibonacci_directions(views):
+        up = (0.0, 0.0, 1.0) if abs(view[2]) < 0.9 else (0.0, 1.0, 0.0)
+        to_world = look_at(centre + 3.0 * radius * view, centre, up)
+        cameras.append(Camera(to_world=to_world, width=size, height=size, kind="orthographic",
+                              ortho_scale=2.0 * radius))
+    return [scene(cam, (frog_medium(),), (FROG_ENERGY_LAMP,), spp) for cam in cameras]
+
+
+# ----------------------------------------------------------------------------- metamerism: two cubes
+
+CUBE_EDGE = 1.0
+CUBE_CENTRES = ((-0.85, 0.0, 0.5), (0.85, 0.0, 0.5))  # mirror images across x = 0
+CUBE_DENSITY = 30.0  # optical depth 30 across a cube: a solid-looking block of scattering medium
+METAMER_SUN = dict(elevation=55.0, azimuth=180.0)  # behind the camera, in the cubes' mirror plane
+METAMER_FILL = 0.3  # environment luminance relative to the sun's
+
+
+def cube(name: str, centre, albedo) -> Medium:
+    """A cube of dense, isotropically scattering medium with the albedo spectrum `albedo`."""
+    lo, hi = np.asarray(centre) - CUBE_EDGE / 2, np.asarray(centre) + CUBE_EDGE / 2
+    grid = sampled_grid(uniform, (16, 16, 16), lo, hi)
+    return medium(name, grid, CUBE_DENSITY, albedo=albedo)
+
+
+def metamer_camera(width: int, height: int) -> Camera:
+    return camera((0.0, -4.4, 2.5), (0.0, 0.0, 0.4), width, height, 40.0)
+
+
+def two_cubes(albedo_left, albedo_right, light: spectra.Spectrum, width: int, height: int, spp: int) -> Scene:
+    """The two cubes side by side under a sun and a fill light that both have the spectrum `light`.
+    The geometry is mirror-symmetric, so a cube's look depends only on its albedo, not its side."""
+    media = (cube("left cube", CUBE_CENTRES[0], albedo_left), cube("right cube", CUBE_CENTRES[1], albedo_right))
+    lights = (sun(light, 1.0, **METAMER_SUN), Light(kind="environment", spectrum=light, strength=METAMER_FILL))
+    return scene(metamer_camera(width, height), media, lights, spp)
+
+
+# The report's simple version: one cube scatters only the short half of the visible range, the other
+# the short and the long ends; light: all of D65, or only D65's lower half (where the two agree).
+LOW_END = 0.05 + 0.85 * (1.0 - smooth_step(500.0, 20.0))
+HIGH_END = 0.85 * smooth_step(610.0, 20.0)
+SIMPLE_ALBEDOS = (spectra.Spectrum(LOW_END), spectra.Spectrum(LOW_END + HIGH_END))
+LIGHTS = {
+    "D65": spectra.illuminant("D65"),
+    "D65 lower half": spectra.window(spectra.illuminant("D65"), 300.0, 570.0),
+    "A": spectra.illuminant("A"),
+}
+
+
+def metamerism_simple(light: str):
+    """Builder of the report's two cubes under `light` ("D65" or "D65 lower half")."""
+    def build(width: int, height: int, spp: int) -> Scene:
+        return two_cubes(*SIMPLE_ALBEDOS, LIGHTS[light], width, height, spp)
+
+    return build
+
+
+# ----------------------------------------------------------------------------- fire
+
+
+def smooth_noise(cells, scale_cells: float, seed: int, stretch=(1.0, 1.0, 1.0)) -> np.ndarray:
+    """Smooth random field on a grid of `cells`, features about `scale_cells` cells across (times
+    `stretch` per axis), zero mean and unit standard deviation."""
+    from scipy.ndimage import gaussian_filter
+
+    field = gaussian_filter(np.random.default_rng(seed).standard_normal(tuple(cells)),
+                            sigma=[scale_cells * s for s in stretch], mode="wrap")
+    return ((field - field.mean()) / field.std()).astype(np.float32)
+
+
+FIRE_CELLS = (56, 56, 96)
+FIRE_BOX = ((-0.7, -0.7, 0.0), (0.7, 0.7, 2.4))
+FLAME_HEIGHT = 1.25
+FIRE_TEMPERATURES = (1000.0, 2000.0)  # kelvin: the flame's edge and its hottest core
+FIRE_INTENSITY = 1.0  # scales the blackbody radiance (W·m⁻²·sr⁻¹·nm⁻¹)
+
+
+def fire_grids() -> tuple[Grid, Grid, Grid]:
+    """Soot of the flame, its temperature (kelvin, 0 where cold) and the smoke rising above it."""
+    (x, y, z), index_to_world = cell_centres(FIRE_CELLS, *FIRE_BOX)
+    wobble = smooth_noise(FIRE_CELLS, 3.0, seed=3, stretch=(1.0, 1.0, 2.5))
+    detail = smooth_noise(FIRE_CELLS, 1.5, seed=4, stretch=(1.0, 1.0, 2.0))
+    sway = 0.06 * np.sin(3.0 * z)  # the plume leans and curls a little as it rises
+    r = np.hypot(x - sway, y) * np.maximum(1.0 + 0.25 * wobble + 0.1 * detail, 0.3)
+    h = z / FLAME_HEIGHT
+    # Flame: a teardrop, widest a third of the way up; heat falls from the axis to its edge.
+    flame_radius = 0.3 * np.sqrt(np.clip(1.0 - h, 0.0, 1.0)) * np.clip(2.5 * h + 0.35, 0.0, 1.0)
+    heat = np.clip(1.0 - r / np.maximum(flame_radius, 1e-6), 0.0, 1.0)
+    low, high = FIRE_TEMPERATURES
+    temperature = np.where(heat > 0.0, low + (high - low) * np.sqrt(heat), 0.0)
+    soot = np.clip(3.0 * heat, 0.0, 1.0)
+    # Smoke: a widening column from the flame's tip, thinning out towards the top.
+    smoke_radius = 0.1 + 0.25 * np.clip((z - 0.8) / 1.6, 0.0, 1.0)
+    column = np.clip(1.2 - r / smoke_radius, 0.0, 1.0) * np.clip((z - 0.9) / 0.4, 0.0, 1.0)
+    smoke = column * np.clip((2.35 - z) / 0.9, 0.0, 1.0) * np.clip(0.5 + 0.6 * detail, 0.0, 1.0)
+    as_grid = lambda values, name: Grid(np.ascontiguousarray(values.astype(np.float32)), index_to_world, name)
+    return as_grid(soot, "density"), as_grid(temperature, "temperature"), as_grid(smoke, "density")
+
+
+def fire(width: int, height: int, spp: int) -> Scene:
+    """A flame of black-body emitting soot with grey smoke above it, under a faint night sky."""
+    soot, temperature, smoke = fire_grids()
+    emission = BlackbodyEmission(temperature=temperature, intensity=FIRE_INTENSITY)
+    flame = medium("flame", soot, 5.0, albedo=0.2, emission=emission)
+    plume = medium("smoke", smoke, 6.0, albedo=0.7)
+    # A bluish moon from above and behind lights the smoke; the background stays black.
+    moon = sun(spectra.blackbody(9000.0), 1.0, elevation=45.0, azimuth=150.0, name="moon")
+    cam = camera((0.0, -4.6, 1.0), (0.0, 0.0, 1.0), width, height, 48.0)
+    return scene(cam, (flame, plume), (moon,), spp)
