@@ -13,22 +13,11 @@ towards +x.
 import numpy as np
 
 from addon.tracer import spectra
-from addon.tracer.scene import BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
+from addon.tracer.scene import (BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene,
+                                 look_at)
 from addon.tracer.wavelengths import GRID
 
 # ----------------------------------------------------------------------------- shared helpers
-
-
-def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
-    """Blender camera matrix (looks along local −z, +y up) at `eye` looking at `target`."""
-    eye, target, up = (np.asarray(v, dtype=np.float64) for v in (eye, target, up))
-    back = eye - target
-    back /= np.linalg.norm(back)
-    right = np.cross(up, back)
-    right /= np.linalg.norm(right)
-    matrix = np.eye(4)
-    matrix[:3, 0], matrix[:3, 1], matrix[:3, 2], matrix[:3, 3] = right, np.cross(back, right), back, eye
-    return matrix
 
 
 def camera(eye, target, width: int, height: int, fov_degrees: float) -> Camera:

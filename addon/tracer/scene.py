@@ -104,6 +104,19 @@ class Camera:
     shift_y: float = 0.0
 
 
+def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """A camera's `to_world` in Blender's convention (looks along its local −z, +y up) at `eye`,
+    looking at `target`, with `up` pointing up in the image."""
+    eye, target, up = (np.asarray(v, dtype=np.float64) for v in (eye, target, up))
+    back = eye - target
+    back /= np.linalg.norm(back)
+    right = np.cross(up, back)
+    right /= np.linalg.norm(right)
+    matrix = np.eye(4)
+    matrix[:3, 0], matrix[:3, 1], matrix[:3, 2], matrix[:3, 3] = right, np.cross(back, right), back, eye
+    return matrix
+
+
 @dataclass(frozen=True)
 class RenderSettings:
     spp: int = 16
