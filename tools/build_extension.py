@@ -38,14 +38,16 @@ def blender_ext_script() -> Path:
     return found[-1]
 
 
-def wheel_platform(filename: str) -> str | None:
-    """The Blender platform a wheel is for, or None for a pure-Python wheel."""
+def wheel_platforms(filename: str) -> tuple[str, ...]:
+    """The Blender platforms a wheel is for: () for a pure-Python wheel, both macOS ones for universal2."""
     platform_tag = filename[: -len(".whl")].split("-")[-1]
     if platform_tag == "any":
-        return None
+        return ()
+    if "macosx" in platform_tag and "universal2" in platform_tag:
+        return ("macos-arm64", "macos-x64")
     for platform, markers in PLATFORM_TAGS.items():
         if all(marker in platform_tag for marker in markers):
-            return platform
+            return (platform,)
     raise SystemExit(f"error: cannot tell which platform wheel {filename!r} is for")
 
 
@@ -83,7 +85,8 @@ def build(platforms: list[str], out_dir: Path) -> list[Path]:
     unknown = set(platforms) - set(manifest["platforms"])
     if unknown:
         raise SystemExit(f"error: platform(s) {sorted(unknown)} not in the manifest's {manifest['platforms']}")
-    wheels = [w for w in manifest["wheels"] if wheel_platform(Path(w).name) in (None, *platforms)]
+    wheels = [w for w in manifest["wheels"]
+              if not wheel_platforms(Path(w).name) or set(wheel_platforms(Path(w).name)) & set(platforms)]
 
     wheel_dir = ROOT / "wheels"
     wheel_dir.mkdir(exist_ok=True)

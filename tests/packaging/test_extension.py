@@ -46,7 +46,7 @@ INSTALL_SCRIPT = textwrap.dedent(
     assert hasattr(bpy.types, "SPECTRAL_PT_sidebar"), "sidebar panel not registered"
     site = os.path.join(os.environ["BLENDER_USER_RESOURCES"], "extensions", ".local", "lib",
                         "python%d.%d" % sys.version_info[:2], "site-packages")
-    assert {"numba", "llvmlite", "colour", "scipy"} <= set(os.listdir(site)), os.listdir(site)
+    assert {"numba", "llvmlite", "colour", "scipy", "dask", "distributed"} <= set(os.listdir(site)), os.listdir(site)
     bpy.ops.preferences.addon_disable(module=module)
     assert not hasattr(bpy.types.Scene, "spectral"), "scene settings left after disable"
     assert not hasattr(bpy.types, "SPECTRAL_PT_sidebar"), "panel left after disable"
@@ -79,6 +79,36 @@ def test_bundled_wheels_match_the_pinned_environment():
         if "macosx" in platform_tag and "x86_64" in platform_tag:
             continue  # Intel macs: last numba/llvmlite with wheels, stated in the manifest
         assert pins[name.lower().replace("_", "-")] == version, wheel
+
+
+BLENDER_SHIPS = {"numpy"}  # what the bundled wheels may rely on Blender's own Python for
+
+
+def test_bundled_wheels_bring_their_whole_dependency_closure(extension_zip):
+    """Blender resolves no dependencies: every requirement of a bundled wheel (on Python 3.13, this
+    platform, no extras) must be another bundled wheel or something Blender ships."""
+    import io
+    import zipfile
+
+    from packaging.markers import default_environment
+    from packaging.requirements import Requirement
+    from packaging.utils import canonicalize_name
+
+    environment = {**default_environment(), "python_version": "3.13", "extra": ""}
+    package = zipfile.ZipFile(extension_zip)
+    wheels = [n for n in package.namelist() if n.startswith("wheels/") and n.endswith(".whl")]
+    bundled = {canonicalize_name(Path(w).name.split("-")[0]) for w in wheels}
+    missing = set()
+    for wheel in wheels:
+        with zipfile.ZipFile(io.BytesIO(package.read(wheel))) as inner:
+            (metadata,) = [n for n in inner.namelist() if n.endswith(".dist-info/METADATA")]
+            for line in inner.read(metadata).decode().splitlines():
+                if line.startswith("Requires-Dist:"):
+                    requirement = Requirement(line.removeprefix("Requires-Dist:").strip())
+                    if requirement.marker is None or requirement.marker.evaluate(environment):
+                        missing.add(canonicalize_name(requirement.name))
+    assert {"dask", "distributed"} <= bundled
+    assert missing - bundled - BLENDER_SHIPS == set()
 
 
 def test_tracer_imports_without_bpy():
