@@ -2,8 +2,8 @@
 
 Both give the same RenderResult (the distributed film is bit-identical, docs/distributed.md) and call
 `progress(film, fraction)` and `cancel()` alike, so the engine, Render to Image and the CLI show the
-cluster's progress and stop it the same way. Blender does not bundle Dask: a scheduler address in a
-Blender without it is reported as an error by the tracer, with what to install.
+cluster's progress and stop it the same way. Dask comes with the extension's wheels; where it is
+missing anyway (the add-on run from a source checkout) the tracer reports what to install.
 """
 
 from .tracer import render as local
