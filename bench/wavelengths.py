@@ -36,7 +36,7 @@ REPORT = {"wavelengths_per_path": 1, "wavelength_sampling": "uniform", "lambda_m
 METHODS = {
     "report": {**REPORT, "cmf": "cie1931"},
     "report+wyman1": {**REPORT, "cmf": "wyman1"},
-    "ours": {"wavelengths_per_path": 4, "wavelength_sampling": "visible", "lambda_min": 360.0, "lambda_max": 830.0,
+    "ours": {"wavelengths_per_path": 4, "wavelength_sampling": "colour", "lambda_min": 360.0, "lambda_max": 830.0,
              "cmf": "cie1931"},
 }
 ABLATION = {

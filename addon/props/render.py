@@ -21,7 +21,8 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
                                  default=DEFAULTS.bands, min=1, soft_max=64)
     wavelength_sampling: bpy.props.EnumProperty(
         name="Wavelength Sampling", default=DEFAULTS.wavelength_sampling, items=[
-        ("visible", "Visible", "Importance by the eye's sensitivity"),
+        ("colour", "Colour", "Importance by the colour matching functions: least colour noise"),
+        ("visible", "Visible", "Importance by the eye's sensitivity (pbrt-v4's visible density)"),
         ("light", "Lights", "Importance by the lights' spectra"),
         ("uniform", "Uniform", "Every wavelength alike (380–700 nm)"),
         ("d65_rejection", "D65", "Importance by daylight (rejection sampling)"),

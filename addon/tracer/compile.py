@@ -236,10 +236,13 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
     return out
 
 
-def wavelength_distribution(mode: str, light_spd: np.ndarray, light_power: np.ndarray, lo: float, hi: float):
+def wavelength_distribution(mode: str, light_spd: np.ndarray, light_power: np.ndarray, xyz_weights: np.ndarray,
+                            lo: float, hi: float):
     """The hero-wavelength distribution over [lo, hi] for a `wavelength_sampling` mode."""
     if mode in ("uniform", "uv"):
         return sampling.uniform(lo, hi)
+    if mode == "colour":
+        return sampling.colour_distribution(xyz_weights, lo, hi)
     if mode == "visible":
         return sampling.visible_distribution(lo, hi)
     if mode == "d65_rejection":
@@ -302,6 +305,7 @@ def compile_scene(scene: Scene) -> KernelScene:
 
 def with_band(kernel_scene: KernelScene, mode: str, lo: float, hi: float) -> KernelScene:
     """The same kernel data with the hero wavelength drawn from [lo, hi] by `mode`."""
-    distribution = wavelength_distribution(mode, kernel_scene.light_spd, kernel_scene.light_power, lo, hi)
+    distribution = wavelength_distribution(mode, kernel_scene.light_spd, kernel_scene.light_power,
+                                           kernel_scene.xyz_weights, lo, hi)
     return kernel_scene._replace(lambda_cdf=np.asarray(distribution.cdf, dtype=np.float64),
                                  lambda_pdf=np.asarray(distribution.bin_pdf, dtype=np.float64))

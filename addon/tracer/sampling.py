@@ -13,7 +13,8 @@ inside Numba kernels (`shared_math.shared`), where they are called with one path
 
 The seminar report's samplers (§3.2) are here too: uniform over 380–700 nm, D65 by rejection sampling
 (`d65_rejection`, with its pdf) and the UV-extended range; plus the mixture of the lights' spectra, the
-visible-range importance density, and the split of a range into bands for per-wavelength passes.
+visible-range importance density, the colour importance (the default: visible density mixed with the
+colour matching functions' norm), and the split of a range into bands for per-wavelength passes.
 """
 
 import numpy as np
@@ -186,6 +187,20 @@ def visible_distribution(lo=VISIBLE_MIN, hi=VISIBLE_MAX) -> BinnedDistribution:
     bin weighted by its exact integral tanh(A (λ − C)) / A between the bin's edges."""
     antiderivative = np.tanh(_VISIBLE_A * (GRID - _VISIBLE_C)) / _VISIBLE_A
     return BinnedDistribution(np.diff(antiderivative), lo, hi, what="the visible importance density")
+
+
+def colour_distribution(xyz_weights, lo=VISIBLE_MIN, hi=VISIBLE_MAX) -> BinnedDistribution:
+    """Importance for colour: half the visible density, half ∝ ‖(x̄, ȳ, z̄)(λ)‖ of the colour matching
+    functions `xyz_weights` (3 × GRID.size). The visible half keeps luminance noise where it was; the
+    norm half follows z̄'s tall blue lobe, which the visible density undersamples, so the X, Y and Z
+    noise is balanced (about half the summed variance of "visible" alone on a white cloud)."""
+    weights = np.asarray(xyz_weights, dtype=np.float64)
+    if weights.shape != (3, GRID.size):
+        raise SpectralError(f"colour matching weights need shape (3, {GRID.size}), got {weights.shape}")
+    visible = visible_distribution(lo, hi).bin_pdf
+    cmf_norm = BinnedDistribution(np.linalg.norm(0.5 * (weights[:, :-1] + weights[:, 1:]), axis=0), lo, hi,
+                                  what="the colour matching functions").bin_pdf
+    return BinnedDistribution(0.5 * visible + 0.5 * cmf_norm, lo, hi, what="the colour importance density")
 
 
 def stratified_wavelengths(dist: BinnedDistribution, u, n=4):

@@ -123,7 +123,8 @@ class RenderSettings:
     seed: int = 0
     max_depth: int = 64
     rr_depth: int = 5  # Russian roulette starts after this many scattering events
-    wavelength_sampling: str = "visible"  # pdf of the hero λ: "uniform" | "d65_rejection" | "uv" | "light" | "visible"
+    # pdf of the hero λ: "colour" | "visible" | "light" | "uniform" | "d65_rejection" | "uv"
+    wavelength_sampling: str = "colour"
     wavelengths_per_path: int = 4  # 1, or 4 (hero + 3 rotated, spectral MIS)
     lambda_min: float = 360.0
     lambda_max: float = 830.0

@@ -10,6 +10,7 @@ from numba import njit as jit
 from scipy import integrate
 
 from addon.tracer import sampling
+from addon.tracer.colorimetry import xyz_weights
 from tests.support.statistics import chi_square_pvalue as counts_pvalue
 from addon.tracer.errors import SpectralError
 from addon.tracer.spectra import constant, gaussian, illuminant, table
@@ -39,6 +40,7 @@ DISTRIBUTIONS = {
     "uv extended": lambda: sampling.uv_extended(),
     "gaussian spectrum": lambda: sampling.from_spectrum(gaussian(450, 30), 360, 830),
     "visible": lambda: sampling.visible_distribution(),
+    "colour": lambda: sampling.colour_distribution(xyz_weights()),
     "d65 binned": lambda: sampling.d65(360, 830),
     "two lights": lambda: sampling.composite_light_distribution([(gaussian(420, 10), 1.0), (constant(2.0), 3.0)]),
 }
@@ -207,3 +209,35 @@ def test_band_ranges():
 def test_bad_input_raises_spectral_error(call, message):
     with pytest.raises(SpectralError, match=message):
         call()
+
+
+def test_colour_distribution_is_half_visible_half_cmf_norm():
+    weights = xyz_weights()
+    dist = sampling.colour_distribution(weights, 360, 830)
+    norm = np.linalg.norm(0.5 * (weights[:, :-1] + weights[:, 1:]), axis=0)
+    norm[:110] = 0.0  # below 360 nm
+    expected = 0.5 * sampling.visible_distribution(360, 830).bin_pdf + 0.5 * norm / norm.sum()
+    assert np.allclose(dist.bin_pdf, expected, rtol=1e-12, atol=0)
+
+
+def single_wavelength_variance(dist, spectrum):
+    """Exact per-sample variance of the one-wavelength estimate c(λ) S(λ) / p(λ) of X, Y and Z, by
+    summation over the 1 nm bins (midpoint values; the same for every distribution compared)."""
+    weights = xyz_weights()
+    integrand = 0.5 * (weights[:, :-1] + weights[:, 1:]) * 0.5 * (spectrum.values[:-1] + spectrum.values[1:])
+    p = dist.bin_pdf
+    inside = p > 0
+    second_moment = (integrand[:, inside] ** 2 / p[inside]).sum(axis=1)
+    return second_moment - integrand[:, inside].sum(axis=1) ** 2
+
+
+@pytest.mark.parametrize("light", ["D65", "A"])
+def test_colour_importance_lowers_colour_noise_without_raising_luminance_noise(light):
+    """Exact one-wavelength variances: D65 gives X, Y, Z ratios 0.66, 0.90, 0.52 (sum 0.59); A 0.81,
+    0.80, 0.56 (sum 0.78)."""
+    spectrum = illuminant(light)
+    visible = single_wavelength_variance(sampling.visible_distribution(360, 830), spectrum)
+    colour = single_wavelength_variance(sampling.colour_distribution(xyz_weights(), 360, 830), spectrum)
+    assert colour.sum() < 0.8 * visible.sum()
+    assert colour[2] < 0.6 * visible[2]  # Z: the blue lobe the visible density undersamples
+    assert colour[1] < visible[1]

@@ -257,7 +257,7 @@ BAD = [
     ("render.samples", 4, ["render: unknown field 'samples'", "spp, seed"]),
     ("render.seed", -1, ["render.seed: must be at least 0"]),
     ("render.wavelength_sampling", "random",
-     ["render.wavelength_sampling", "'random'", "uniform, d65_rejection, uv, light, visible"]),
+     ["render.wavelength_sampling", "'random'", "uniform, d65_rejection, uv, light, visible, colour"]),
     ("render.cmf", "cie2006", ["render.cmf", "'cie2006'", "cie1931, wyman1, wyman3"]),
     ("render.backend", "cuda", ["render.backend", "'cuda'", "numba, numpy"]),
     ("render.lambda_min", 200, ["render.lambda_min: must be within [250, 830], found 200"]),
