@@ -203,6 +203,7 @@ def test_camera_conventions(registered):
     np.testing.assert_allclose(exported.to_world[:3, :3] @ [0, 0, -1], [0, 1, 0], atol=1e-6)  # looks along +Y
     np.testing.assert_allclose(exported.to_world[:3, 3], [1, 2, 3])
     np.testing.assert_allclose(np.linalg.norm(exported.to_world[:3, :3], axis=0), 1.0)  # scale dropped
+    assert exported.to_world.flags.c_contiguous  # as the tracer's own cameras: one kernel specialisation
     data.type, data.ortho_scale = "ORTHO", 7.0
     exported = camera_export.export_camera(scene)
     assert exported.kind == "orthographic" and exported.ortho_scale == 7.0
