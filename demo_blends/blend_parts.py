@@ -35,9 +35,11 @@ def link(collection, obj):
     return obj
 
 
-def add_camera(collection, camera: Camera, name: str = "Camera"):
-    """A perspective camera object matching a tracer camera (field of view across the wider axis)."""
-    obj = link(collection, bpy.data.objects.new(name, bpy.data.cameras.new(name)))
+def add_camera(scene, camera: Camera, name: str = "Camera"):
+    """The scene's camera: a perspective camera object matching a tracer camera (field of view
+    across the wider axis)."""
+    obj = link(scene.collection, bpy.data.objects.new(name, bpy.data.cameras.new(name)))
+    scene.camera = obj
     obj.matrix_world = Matrix(np.asarray(camera.to_world).tolist())
     obj.data.sensor_fit = "AUTO"
     obj.data.angle = camera.fov
@@ -84,6 +86,11 @@ def set_flat(settings, window=None) -> None:
     _window(settings, window)
 
 
+def set_blackbody(settings, kelvin: float) -> None:
+    """A light spectrum of a black body at `kelvin`."""
+    settings.source, settings.temperature = "BLACKBODY", kelvin
+
+
 def _window(settings, window) -> None:
     settings.use_window = window is not None
     if window is not None:
@@ -116,8 +123,9 @@ def new_world(name: str, light: Light | None = None, spectrum=None):
 # ----------------------------------------------------------------------------- volumes
 
 
-def volume_material(name: str, medium: Medium, temperature_grid: str | None = None):
-    """A Spectral Volume material with the tracer medium's optics (one albedo for every density)."""
+def volume_material(name: str, medium: Medium, temperature_grid: str = "temperature"):
+    """A Spectral Volume material with the tracer medium's optics (one albedo for every density); a
+    glowing medium reads its temperature from the grid `temperature_grid`."""
     material = bpy.data.materials.new(name)
     settings = material.spectral
     settings.enabled = True
@@ -135,7 +143,8 @@ def volume_material(name: str, medium: Medium, temperature_grid: str | None = No
         emission = medium.emission
         settings.use_blackbody, settings.temperature_grid = True, temperature_grid
         settings.blackbody_intensity = emission.intensity
-        settings.temperature_scale, settings.temperature_offset = emission.temperature_scale, emission.temperature_offset
+        settings.temperature_scale = emission.temperature_scale
+        settings.temperature_offset = emission.temperature_offset
     return material
 
 

@@ -22,7 +22,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from addon.tracer import spectra
+import addon
 
 from . import blend_parts as parts
 from . import metamers, scenes
@@ -85,7 +85,7 @@ def build_rayleigh(out: Path) -> list:
     for demo, tracer, label in (("rayleigh_report", report, "Report"), ("rayleigh_true", true, "Rayleigh")):
         scene = _scene(demo)
         collection = scene.collection
-        parts.add_camera(collection, tracer.camera, f"{label} camera")
+        parts.add_camera(scene, tracer.camera, f"{label} camera")
         parts.add_sun(collection, tracer.lights[0], lambda s: parts.set_preset(s, "E"), f"{label} sun")
         scene.world = parts.new_world(f"{label} (no world light)")
         _volumes(collection, tracer.media[:1], path, {"air": f"{label} air"})
@@ -102,7 +102,7 @@ def build_frog(out: Path) -> list:
     frog = scenes.fluorescent_frog(WIDTH, HEIGHT, 1)
     scene = _scene("fluorescent_frog")
     collection = scene.collection
-    parts.add_camera(collection, frog.camera)
+    parts.add_camera(scene, frog.camera)
     lamp, fill = frog.lights
     uv = lambda settings: parts.set_flat(settings, scenes.UV_WINDOW)
     parts.add_sun(collection, lamp, uv)
@@ -114,9 +114,9 @@ def build_frog(out: Path) -> list:
 LIGHT_PRESETS = {"D65": ("D65", None), "D65 lower half": ("D65", scenes.LOWER_HALF), "A": ("A", None)}
 
 
-def build_metamerism(out: Path, pair: metamers.MetamerPair) -> list:
-    """Cube pairs and lights as collections; each scene links one of each (the light switch)."""
-    del out  # the cubes are meshes: nothing to write beside the .blend
+def build_metamerism(pair: metamers.MetamerPair) -> list:
+    """Cube pairs and lights as collections; each scene links one of each (the light switch). The
+    cubes are meshes, voxelised by the add-on: nothing is written beside the .blend."""
     camera = None
     cube_sets = {}
     for label, albedos in (("Simple", scenes.SIMPLE_ALBEDOS), ("Designed", pair.albedos)):
@@ -145,10 +145,9 @@ def build_metamerism(out: Path, pair: metamers.MetamerPair) -> list:
                                ("metamers_d65", "Designed", "D65"), ("metamers_a", "Designed", "A")):
         scene = _scene(demo)
         if camera_object is None:
-            camera_object = parts.add_camera(scene.collection, camera)
+            camera_object = parts.add_camera(scene, camera)
         else:
-            parts.link(scene.collection, camera_object)
-        scene.camera = camera_object
+            scene.camera = parts.link(scene.collection, camera_object)
         lights, scene.world = light_sets[light]
         scene.collection.children.link(cube_sets[cubes])
         scene.collection.children.link(lights)
@@ -163,21 +162,14 @@ def build_fire(out: Path) -> list:
                     {"density": smoke.density, "flame": flame.density, "temperature": flame.emission.temperature})
     scene = _scene("fire")
     collection = scene.collection
-    parts.add_camera(collection, fire.camera)
-    parts.add_sun(collection, fire.lights[0], _blackbody(scenes.MOON_TEMPERATURE))
+    parts.add_camera(scene, fire.camera)
+    parts.add_sun(collection, fire.lights[0], lambda settings: parts.set_blackbody(settings, scenes.MOON_TEMPERATURE))
     scene.world = parts.new_world("Night (no world light)")
     cache, cells = f"//{VOLUMES}/fire_cache", max(scenes.FIRE_CELLS)
     for medium, grid in ((flame, "flame"), (smoke, "density")):
-        material = parts.volume_material(medium.name, medium, temperature_grid="temperature")
-        parts.add_fluid_domain(collection, medium.name, *scenes.FIRE_BOX, cache, cells, material, density_grid=grid)
+        parts.add_fluid_domain(collection, medium.name, *scenes.FIRE_BOX, cache, cells,
+                               parts.volume_material(medium.name, medium), density_grid=grid)
     return [scene]
-
-
-def _blackbody(kelvin: float):
-    def set_spectrum(settings):
-        settings.source, settings.temperature = "BLACKBODY", kelvin
-
-    return set_spectrum
 
 
 # ----------------------------------------------------------------------------- writing
@@ -191,24 +183,20 @@ def designed_pair() -> metamers.MetamerPair:
 def write_blend(path: Path, build) -> None:
     """Start from factory settings with the add-on registered, build, and save `path` compressed."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    import addon
-
     addon.register()
     try:
         empty = bpy.context.scene
         built = build()
         bpy.context.window.scene = built[0]
         bpy.data.scenes.remove(empty)
-        for scene in built:
-            scene.camera = scene.camera or next(o for o in scene.objects if o.type == "CAMERA")
         path.parent.mkdir(parents=True, exist_ok=True)
         bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True, relative_remap=False)
     finally:
         addon.unregister()
 
 
-BUILDERS = {"rayleigh": build_rayleigh, "fluorescent_frog": build_frog, "metamerism": build_metamerism,
-            "fire": build_fire}
+BUILDERS = {"rayleigh": build_rayleigh, "fluorescent_frog": build_frog,
+            "metamerism": lambda _out: build_metamerism(designed_pair()), "fire": build_fire}
 
 
 def build(out: Path = HERE, only=None, log=print) -> list[Path]:
@@ -217,13 +205,8 @@ def build(out: Path = HERE, only=None, log=print) -> list[Path]:
     for name, builder in BUILDERS.items():
         if only and name not in only:
             continue
-        if builder is build_metamerism:
-            pair = designed_pair()
-            make = lambda: build_metamerism(out, pair)
-        else:
-            make = lambda builder=builder: builder(out)
         path = out / f"{name}.blend"
-        write_blend(path, make)
+        write_blend(path, lambda builder=builder: builder(out))
         log(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB)")
         written.append(path)
     return written

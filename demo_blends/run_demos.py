@@ -152,7 +152,8 @@ def run(out: Path, scale: float = 1.0, quality: float = 1.0, only=None, denoise:
     resolution and `quality` × their samples per pixel; write the files into `out`; return
     {name: Result}. Missing .blend files are built first."""
     wanted = [demo for demo in DEMOS if not only or demo.name in only]
-    missing = sorted({build_blends.DEMO_SCENES[d.name].blend for d in wanted} - {p.name for p in blends.glob("*.blend")})
+    needed = {build_blends.DEMO_SCENES[demo.name].blend for demo in wanted}
+    missing = sorted(needed - {path.name for path in blends.glob("*.blend")})
     if missing:
         log(f"building {', '.join(missing)} (python -m demo_blends.build_blends)")
         build_blends.build(blends, [name.removesuffix(".blend") for name in missing], log=log)
