@@ -1,9 +1,8 @@
-"""The demo scenes as tracer `Scene`s, built in code: no files, no downloads.
+"""The demo scenes as tracer `Scene`s, built in code: no files, no downloads. The one source of their numbers.
 
-Each builder takes the image size and samples per pixel and returns a `Scene`; the figures that
-prove each phenomenon are computed from the rendered film by `metrics`. This step builds the demos as
-tracer scenes only: turning them into .blend files through the add-on (issue 6's `*.blend`) is a
-later step, which should reproduce these settings (they are all plain numbers and spectra here).
+Each builder takes the image size and samples per pixel and returns a `Scene`. `build_blends` writes
+these scenes as .blend files (tests/demos/test_blends.py checks that each file exports back to the
+scene built here); `make demo` renders the files and `metrics` computes the figures from the films.
 
 World conventions: Blender's, z up, lengths in Blender units. Directions to lights are given as
 (elevation, azimuth) in degrees, azimuth measured from +y (the direction the cameras look along)
