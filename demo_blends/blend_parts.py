@@ -54,8 +54,7 @@ def set_curve(settings, values: np.ndarray) -> None:
     """Draw `values` (on the wavelength grid) as the setting's curve, a point every CURVE_STEP_NM."""
     settings.source = "CURVE"
     mapping = curves.ensure(settings.curve, settings.Y_RANGE)
-    wavelengths = GRID[::CURVE_STEP_NM]
-    curves.set_points(mapping, wavelengths, np.interp(wavelengths, GRID, values))
+    curves.set_points(mapping, GRID[::CURVE_STEP_NM], values[::CURVE_STEP_NM])  # both ends included
     for point in mapping.curves[0].points:
         point.handle_type = "AUTO_CLAMPED"  # no overshoot between points
     mapping.update()
@@ -81,8 +80,10 @@ def set_preset(settings, illuminant: str, window=None) -> None:
 
 
 def set_flat(settings, window=None) -> None:
-    """A light spectrum of equal energy at every wavelength (down to 250 nm, unlike illuminant E)."""
-    set_curve(settings, np.ones_like(GRID))
+    """A light spectrum of equal energy at every wavelength (down to 250 nm, unlike illuminant E): a
+    flat curve."""
+    settings.source = "CURVE"
+    curves.set_points(curves.ensure(settings.curve, settings.Y_RANGE), (GRID[0], GRID[-1]), (1.0, 1.0))
     _window(settings, window)
 
 
