@@ -1,8 +1,8 @@
 """Blender data from the demos' tracer values: scenes, cameras, suns, worlds, volume materials and objects.
 
 `build_blends` describes each .blend with these; the numbers come from the tracer scenes in `scenes`
-(a tracer Camera, Light or Medium in, the add-on's settings out), so the files and the code-built
-scenes cannot disagree. Needs `bpy` with the add-on registered.
+(a tracer Camera, Light or Medium in, the add-on's settings out); tests/demos/test_blends.py checks
+that the files export back to those scenes. Needs `bpy` with the add-on registered.
 """
 
 import bpy

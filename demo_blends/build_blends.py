@@ -13,6 +13,8 @@ Blender scene exports to the same tracer scene that `scenes` builds in code. Wri
 - `fire.blend`: fire and smoke domains reading one fluid cache (never simulated);
 - `volumes/`: the VDB files they read (`//volumes/...`): the air and ground, the frog, the fire's
   cache `fire_cache/data/fluid_data_0001.vdb`.
+Rebuilding writes the same content in different bytes (Blender and OpenVDB stamp their files), so
+tests/demos/test_blends.py compares the exported scenes, not the files.
 """
 
 import argparse
