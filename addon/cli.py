@@ -1,6 +1,6 @@
 """Headless rendering of a .blend file to a multilayer EXR.
 
-    python -m addon.cli render FILE.blend --out OUT.exr [--frame N] [--spp N] [--scheduler ADDRESS]
+    python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N] [--spp N] [--scheduler ADDRESS]
     blender -c spectral_render FILE.blend --out OUT.exr [...]   (the same, with the extension installed)
 
 Blender command ids must be Python identifiers, hence `spectral_render`. Exit codes: 0 success,
@@ -22,8 +22,9 @@ _handle = None
 
 def _parser(prog: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=prog, description="Render a .blend file with the spectral volume tracer")
-    parser.add_argument("blend", type=Path, help=".blend file to render (its active scene)")
+    parser.add_argument("blend", type=Path, help=".blend file to render")
     parser.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (XYZ, RGB, variance)")
+    parser.add_argument("--scene", help="scene of the file to render (default: the file's active scene)")
     parser.add_argument("--frame", type=int, help="frame to render (default: the file's current frame)")
     parser.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
     parser.add_argument("--scheduler", help="Dask scheduler tcp://HOST:PORT to render on (default: the scene's "
@@ -32,22 +33,42 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     return parser
 
 
-def render_blend(args) -> str:
-    """Open, export, render and write; returns a one-line summary. Raises SpectralError on bad input."""
+def open_scene(blend: Path, scene_name: str | None = None):
+    """Open `blend` and make its scene `scene_name` (default: the file's active scene) the context's
+    scene; returns it. Raises SpectralError when the file or the scene does not exist."""
     import bpy
 
-    from . import dispatch
+    if not blend.is_file():
+        raise SpectralError(f"blend file {blend} does not exist")
+    bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
+    if scene_name is not None:
+        scene = bpy.data.scenes.get(scene_name)
+        if scene is None:
+            names = ", ".join(repr(scene.name) for scene in bpy.data.scenes)
+            raise SpectralError(f"blend file {blend} has no scene {scene_name!r}; its scenes: {names}")
+        bpy.context.window.scene = scene
+    return bpy.context.scene
+
+
+def export_context_scene(frame: int | None = None):
+    """Export the context's scene (at `frame`, default its current frame) to a tracer scene."""
+    import bpy
+
     from .export.scene import export_scene
 
-    if not args.blend.is_file():
-        raise SpectralError(f"blend file {args.blend} does not exist")
+    if frame is not None:
+        bpy.context.scene.frame_set(frame)
+    return export_scene(bpy.context.evaluated_depsgraph_get())
+
+
+def render_blend(args) -> str:
+    """Open, export, render and write; returns a one-line summary. Raises SpectralError on bad input."""
+    from . import dispatch
+
     if args.spp is not None and args.spp < 1:
         raise SpectralError(f"--spp must be at least 1, got {args.spp}")
-    bpy.ops.wm.open_mainfile(filepath=str(args.blend), load_ui=False)
-    scene = bpy.context.scene
-    if args.frame is not None:
-        scene.frame_set(args.frame)
-    export = export_scene(bpy.context.evaluated_depsgraph_get())
+    scene = open_scene(args.blend, args.scene)
+    export = export_context_scene(args.frame)
     for warning in export.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     scheduler = scene.spectral.scheduler_address if args.scheduler is None else args.scheduler
@@ -97,7 +118,8 @@ def unregister_extras():
 def _module_main(argv) -> int:
     """`python -m addon.cli render ...`: registers the add-on in this bpy module first."""
     if not argv or argv[0] != "render":
-        print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--frame N] [--spp N]", file=sys.stderr)
+        print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N] [--spp N]",
+              file=sys.stderr)
         return 2
     from . import register
 

@@ -1,6 +1,6 @@
-"""Demo scenes and the script that renders them (`make demo`).
+"""Demo scenes: the .blend files, the script that builds them and the one that renders them (`make demo`).
 
-The demos are tracer scenes built in code (`scenes`, `metamers`), rendered by `run_demos` and
-measured by `metrics`; `display` makes the pictures. Turning them into .blend files that render
-through the add-on (issue 6) is a later step that should reproduce the settings in `scenes`.
+`scenes` and `metamers` hold every number as tracer scenes built in code; `build_blends` (with
+`blend_parts`) writes them as .blend files with the add-on's settings; `run_demos` renders those files
+through the add-on and `metrics` measures the films; `display` makes the pictures.
 """

@@ -86,16 +86,24 @@ def face_camera(camera, centre, size: int):
                    shift_x=0.5 * (x0 + x1) / span, shift_y=0.5 * (y0 + y1) / span)
 
 
+def face_response(scene, albedo: float, spp: int = 48, size: int = 24) -> float:
+    """G(albedo): the mean Y of the left cube's front face in the two-cube `scene` when every medium
+    has the constant albedo `albedo` and every light a flat spectrum (strengths kept), seen through
+    `face_camera`."""
+    flat = spectra.constant(1.0)
+    media = tuple(replace(medium, albedo_table=np.full_like(medium.albedo_table, albedo)) for medium in scene.media)
+    lights = tuple(replace(light, spectrum=flat) for light in scene.lights)
+    camera = face_camera(scene.camera, scenes.CUBE_CENTRES[0], size)
+    probe = replace(scene, camera=camera, media=media, lights=lights, settings=replace(scene.settings, spp=spp))
+    xyz = render(probe).film.xyz
+    return float(metrics.region_xyz(xyz, metrics.face_mask(camera, scenes.CUBE_CENTRES[0], scenes.CUBE_EDGE))[1])
+
+
 def calibrate(spp: int = 48, size: int = 24) -> Calibration:
-    """Render the cubes with each constant albedo in CALIBRATION_ALBEDOS under a flat light of
-    radiometric irradiance 1 and record the left front face's mean Y."""
-    responses = []
-    for albedo in CALIBRATION_ALBEDOS:
-        scene = scenes.two_cubes(albedo, albedo, spectra.constant(1.0), 8, 8, spp)
-        scene = replace(scene, camera=face_camera(scene.camera, scenes.CUBE_CENTRES[0], size))
-        xyz = render(scene).film.xyz
-        responses.append(metrics.region_xyz(xyz, metrics.face_mask(scene.camera, scenes.CUBE_CENTRES[0],
-                                                                    scenes.CUBE_EDGE))[1])
+    """G at each albedo in CALIBRATION_ALBEDOS, in the code-built two-cube scene (a sun of radiometric
+    irradiance 1 and its fill)."""
+    scene = scenes.two_cubes(1.0, 1.0, spectra.constant(1.0), 8, 8, spp)
+    responses = [face_response(scene, albedo, spp, size) for albedo in CALIBRATION_ALBEDOS]
     return Calibration(np.array(CALIBRATION_ALBEDOS), np.array(responses))
 
 

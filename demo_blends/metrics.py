@@ -96,6 +96,19 @@ def column_density(camera: Camera, grid: Grid, steps: int = 256) -> np.ndarray:
     return total * (t1 - t0) / steps
 
 
+def medium(scene, name: str):
+    """The scene's medium called `name` (exported media are named after their Blender objects)."""
+    for candidate in scene.media:
+        if candidate.name == name:
+            return candidate
+    raise ValueError(f"the scene has no medium {name!r}; it has {[m.name for m in scene.media]}")
+
+
+def sun(scene) -> Light:
+    """The scene's first sun (the demos' main light; fills and worlds come after it or are not suns)."""
+    return next(light for light in scene.lights if light.kind == "sun")
+
+
 def region_xyz(xyz: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Mean XYZ of the pixels in `mask`."""
     if not mask.any():
@@ -147,15 +160,15 @@ NEAR_SUN_DEGREES = (2.5, 10.0)  # "around the sun": this ring (the disc itself h
 def rayleigh(scene, xyz: np.ndarray) -> dict:
     """Colours of the sky far from the sun, of the ring around it, of the sun's disc as seen through
     the air, and of the light itself (its spectrum), all against the light's own colour as white."""
-    sun = scene.lights[0]
-    angle = angle_from(scene.camera, sun.direction)
+    light = sun(scene)
+    angle = angle_from(scene.camera, light.direction)
     height = elevation(scene.camera)
-    white = light_xyz(sun)
+    white = light_xyz(light)
     regions = {
         "sky away": (angle >= SKY_AWAY[0]) & (height >= SKY_AWAY[1]),
         "around sun": (height > 0.0) & (angle >= NEAR_SUN_DEGREES[0]) & (angle <= NEAR_SUN_DEGREES[1]),
         # the inner part of the disc, or the one pixel nearest its centre in a coarse image
-        "sun disc": (angle <= 0.35 * np.degrees(sun.angle)) | (angle == angle.min()),
+        "sun disc": (angle <= 0.35 * np.degrees(light.angle)) | (angle == angle.min()),
     }
     figures = {name: describe(region_xyz(xyz, mask), white) for name, mask in regions.items()}
     figures["light"] = describe(white, white)
@@ -174,7 +187,7 @@ def metamerism(scene, xyz: np.ndarray, centres, edge: float, white_response: flo
     """CIEDE2000 between the two cubes' front faces. The white for CIELAB is what a white cube
     (albedo 1) shows there: `white_response` (G(1) of the calibration) times the light's XYZ."""
     left, right = cube_faces(scene, xyz, centres, edge)
-    white = white_response * light_xyz(scene.lights[0])
+    white = white_response * light_xyz(sun(scene))
     return {"left": describe(left, white), "right": describe(right, white),
             "delta_e": float(colorimetry.delta_e_2000(left, right, white))}
 
@@ -186,16 +199,15 @@ FROG_COLUMN = 0.3  # a pixel shows the frog if its ray crosses at least this muc
 
 
 def frog(scene, xyz: np.ndarray) -> dict:
-    """Colour of the frog (pixels whose rays cross its body), of the white pad around it and of the
-    lamp's own spectrum, against the D65 white (the display's white: what "green" and "violet" mean
-    on screen). The lamp has no white of its own to compare with, being nearly all UV."""
-    frog_medium, pad = scene.media[0], scene.media[1]
+    """Colour of the frog (pixels whose rays cross the medium "frog"), of the white "pad" around it
+    and of the lamp's own spectrum, against the D65 white (the display's white: what "green" and
+    "violet" mean on screen). The lamp has no white of its own to compare with, being nearly all UV."""
     white = np.array(colorimetry.colour_science().xy_to_XYZ(D65_WHITE_XY))
-    on_frog = column_density(scene.camera, frog_medium.density) >= FROG_COLUMN
-    on_pad = (column_density(scene.camera, pad.density) >= 0.02) & ~on_frog
+    on_frog = column_density(scene.camera, medium(scene, "frog").density) >= FROG_COLUMN
+    on_pad = (column_density(scene.camera, medium(scene, "pad").density) >= 0.02) & ~on_frog
     return {"frog": describe(region_xyz(xyz, on_frog), white),
             "pad": describe(region_xyz(xyz, on_pad), white),
-            "lamp": describe(light_xyz(scene.lights[0]), white)}
+            "lamp": describe(light_xyz(sun(scene)), white)}
 
 
 def absorbed_power(medium, light: Light, supersample: int = 4) -> float:

@@ -1,41 +1,44 @@
-"""The main job (`make demo`): renders every demo headless and prints the figures that prove each one.
+"""The main job (`make demo`): renders every demo's .blend file headless through the add-on and prints
+the figures that prove each one.
 
-The demos are tracer scenes built in code (`scenes`, `metamers`); rendering them as .blend files
-through the add-on is a later step (issue 6). Written into the output folder:
+Each demo is a scene of a .blend file in `demo_blends/` (`build_blends.DEMO_SCENES`; files that are
+missing are built first). It is opened in Blender-as-a-module, exported by the add-on (`addon.cli`)
+and rendered by the add-on's dispatcher. Written into the output folder:
 - `<name>.exr`: the raw film, multilayer (R G B A linear Rec.709, spectral.X/Y/Z, variance.X/Y/Z);
-- `<name>.png`: the display image, denoised (`display`), Standard view;
+- `<name>.png`: the display image, denoised (`display`), Standard view at the scene's exposure;
 - `contact_sheet.png` (all demos, captioned) with `contact_sheet.txt` (the captions as text);
 - `figures.json`: every printed figure, for scripts and tests.
-Every figure is computed from the raw film (`metrics`), never from the denoised image.
+Every figure is computed from the raw film and the exported scene (`metrics`), never from the
+denoised image.
 """
 
 import argparse
 import json
 import time
-from dataclasses import dataclass, field
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
-from addon.tracer import image_io
+import addon
+from addon import cli, dispatch
+from addon.tracer import colorimetry, image_io
 from addon.tracer.render import render
 from addon.tracer.scene import Scene
 
-from . import display, metamers, metrics, scenes
-
-WIDTH, HEIGHT = 256, 160
+from . import build_blends, display, metamers, metrics, scenes
 
 
 @dataclass(frozen=True)
 class Demo:
+    """A demo: its Blender scene is `build_blends.DEMO_SCENES[name]` (file, scene, samples, exposure)."""
+
     name: str
     title: str
-    build: Callable[[int, int, int], Scene]
-    spp: int
     figures: Callable[[Scene, np.ndarray], dict]
     lines: Callable[[dict], list[str]]  # what to print; the first line is also the picture's caption
-    exposure: float = 0.0
 
 
 # ----------------------------------------------------------------------------- what each demo prints
@@ -73,29 +76,22 @@ def _fire_lines(f: dict) -> list[str]:
             f"{scenes.FIRE_TEMPERATURES[0]:.0f}–{scenes.FIRE_TEMPERATURES[1]:.0f} K"]
 
 
-def demo_list(pair: metamers.MetamerPair) -> list[Demo]:
-    white = float(pair.calibration.g(1.0))
+def _cubes(scene, xyz) -> dict:
+    """ΔE00 between the cubes against the white of an albedo-1 cube in this very scene."""
+    white = metamers.face_response(scene, 1.0)
+    return metrics.metamerism(scene, xyz, scenes.CUBE_CENTRES, scenes.CUBE_EDGE, white)
 
-    def cubes(scene, xyz):
-        return metrics.metamerism(scene, xyz, scenes.CUBE_CENTRES, scenes.CUBE_EDGE, white)
 
-    return [
-        Demo("rayleigh_report", "Rayleigh, the report's setup", scenes.rayleigh_report, 48, metrics.rayleigh,
-             _sky_lines, exposure=-1.0),
-        Demo("rayleigh_true", "Rayleigh: 1/lambda^4, Rayleigh phase", scenes.rayleigh_true, 48, metrics.rayleigh,
-             _sky_lines, exposure=2.0),
-        Demo("fluorescent_frog", "Fluorescent frog, 275-450 nm lamp", scenes.fluorescent_frog, 32, metrics.frog,
-             _frog_lines),
-        Demo("fire", "Fire: blackbody 1000-2000 K", scenes.fire, 48, metrics.fire, _fire_lines),
-        Demo("metamers_simple_d65", "Report's cubes under D65", scenes.metamerism_simple("D65"), 24, cubes,
-             _cube_lines, exposure=0.5),
-        Demo("metamers_simple_lower_half", "Report's cubes, D65 below 570 nm", scenes.metamerism_simple("D65 lower half"),
-             24, cubes, _cube_lines, exposure=0.5),
-        Demo("metamers_d65", "Designed metamers under D65", metamers.metamerism_designed(pair, "D65"), 24, cubes,
-             _cube_lines, exposure=1.0),
-        Demo("metamers_a", "Designed metamers under A", metamers.metamerism_designed(pair, "A"), 24, cubes,
-             _cube_lines, exposure=1.0),
-    ]
+DEMOS = [
+    Demo("rayleigh_report", "Rayleigh, the report's setup", metrics.rayleigh, _sky_lines),
+    Demo("rayleigh_true", "Rayleigh: 1/lambda^4, Rayleigh phase", metrics.rayleigh, _sky_lines),
+    Demo("fluorescent_frog", "Fluorescent frog, 275-450 nm lamp", metrics.frog, _frog_lines),
+    Demo("fire", "Fire: blackbody 1000-2000 K", metrics.fire, _fire_lines),
+    Demo("metamers_simple_d65", "Report's cubes under D65", _cubes, _cube_lines),
+    Demo("metamers_simple_lower_half", "Report's cubes, D65 below 570 nm", _cubes, _cube_lines),
+    Demo("metamers_d65", "Designed metamers under D65", _cubes, _cube_lines),
+    Demo("metamers_a", "Designed metamers under A", _cubes, _cube_lines),
+]
 
 
 # ----------------------------------------------------------------------------- running
@@ -104,77 +100,99 @@ def demo_list(pair: metamers.MetamerPair) -> list[Demo]:
 @dataclass
 class Result:
     demo: Demo
-    scene: Scene
+    scene: Scene  # the tracer scene the add-on exported from the .blend
     xyz: np.ndarray
     variance: np.ndarray
     seconds: float
+    exposure: float
     figures: dict = field(default_factory=dict)
 
 
-def frog_energy(size: int, spp: int, views: int) -> dict:
-    """The frog's emitted power (from renders over the sphere) against the UV power it absorbs
-    (computed from its grid and the lamp, `metrics.absorbed_power`)."""
-    rendered = [(view, render(view).film.xyz) for view in scenes.frog_energy_views(size, spp, views)]
-    emitted, intensities = metrics.emitted_power(rendered, scenes.FROG_EMISSION)
-    absorbed = metrics.absorbed_power(scenes.frog_medium(), scenes.FROG_ENERGY_LAMP)
+def frog_energy(body, size: int, spp: int, views: int) -> dict:
+    """The frog's emitted power (from renders of `body`, the exported frog medium, over the sphere)
+    against the UV power it absorbs (from its grid and the lamp, `metrics.absorbed_power`)."""
+    rendered = [(view, render(view).film.xyz) for view in scenes.frog_energy_views(size, spp, views, body)]
+    emitted, intensities = metrics.emitted_power(rendered, body.fluorescence.emission)
+    absorbed = metrics.absorbed_power(body, scenes.FROG_ENERGY_LAMP)
     return {"emitted_W": emitted, "absorbed_W": absorbed, "ratio": emitted / absorbed,
-            "quantum_yield": scenes.FROG_QUANTUM_YIELD, "views": views,
+            "quantum_yield": body.fluorescence.quantum_yield, "views": views,
             "intensity_min": float(intensities.min() / intensities.mean()),
             "intensity_max": float(intensities.max() / intensities.mean())}
 
 
-def run(out: Path, scale: float = 1.0, quality: float = 1.0, only=None, denoise: bool = True, log=print) -> dict:
-    """Render the demos (`only`: names to keep) at `scale` × 256×160 pixels and `quality` × their
-    samples per pixel; write the files into `out`; return {name: Result} plus "metamer_design"."""
-    width, height = max(16, int(round(WIDTH * scale))), max(10, int(round(HEIGHT * scale)))
-    samples = lambda spp: max(2, int(round(spp * quality)))
-    start = time.perf_counter()
-    calibration = metamers.calibrate()  # never cut: its error would bias the pair, not just add noise
-    pair = metamers.metamer_pair(calibration)
-    design = {"seconds": time.perf_counter() - start, "response": calibration.response.tolist(),
-              "albedos": list(metamers.CALIBRATION_ALBEDOS),
-              "predicted_delta_e": {light: pair.predicted_delta_e(light) for light in ("D65", "A")}}
-    log(f"metamer design: calibrated the cube's response at {len(calibration.albedos)} albedos and designed "
-        f"the pair in {design['seconds']:.1f} s; predicted ΔE00 {design['predicted_delta_e']['D65']:.2f} under "
-        f"D65, {design['predicted_delta_e']['A']:.1f} under A")
+@contextmanager
+def addon_registered():
+    """The add-on registered in this `bpy` for the duration (its settings are read from the files)."""
+    addon.register()
+    try:
+        yield
+    finally:
+        addon.unregister()
+
+
+def render_demo(demo: Demo, blends: Path, scale: float, quality: float) -> Result:
+    """Open the demo's .blend, export its scene through the add-on at `scale` × its resolution and
+    render it at `quality` × its samples per pixel."""
+    where = build_blends.DEMO_SCENES[demo.name]
+    blender_scene = cli.open_scene(blends / where.blend, where.scene)
+    blender_scene.render.resolution_percentage = max(1, round(100 * scale))
+    spp = max(2, round(blender_scene.spectral.samples * quality))
+    export = cli.export_context_scene()
+    for warning in export.warnings:
+        print(f"warning: {warning}")
+    scene = replace(export.scene, settings=replace(export.scene.settings, spp=spp))
+    rendered = dispatch.run(scene)
+    film = rendered.film
+    return Result(demo, scene, film.xyz, film.variance, rendered.seconds, blender_scene.view_settings.exposure)
+
+
+def run(out: Path, scale: float = 1.0, quality: float = 1.0, only=None, denoise: bool = True,
+        blends: Path = build_blends.HERE, log=print) -> dict:
+    """Render the demos' .blend files in `blends` (`only`: demo names to keep) at `scale` × their
+    resolution and `quality` × their samples per pixel; write the files into `out`; return
+    {name: Result}. Missing .blend files are built first."""
+    wanted = [demo for demo in DEMOS if not only or demo.name in only]
+    needed = {build_blends.DEMO_SCENES[demo.name].blend for demo in wanted}
+    missing = sorted(needed - {path.name for path in blends.glob("*.blend")})
+    if missing:
+        log(f"building {', '.join(missing)} (python -m demo_blends.build_blends)")
+        build_blends.build(blends, [name.removesuffix(".blend") for name in missing], log=log)
     results = {}
-    for demo in demo_list(pair):
-        if only and demo.name not in only:
-            continue
-        scene = demo.build(width, height, samples(demo.spp))
-        rendered = render(scene)
-        film = rendered.film
-        result = Result(demo, scene, film.xyz, film.variance, rendered.seconds)
-        result.figures = demo.figures(scene, result.xyz)
-        if demo.name == "fluorescent_frog":
-            energy_start = time.perf_counter()
-            result.figures["energy"] = frog_energy(24, samples(64), 16)
-            result.figures["energy"]["seconds"] = time.perf_counter() - energy_start
-        image_io.write_exr(out / f"{demo.name}.exr", film.xyz, film.rgb(), film.variance)
-        image_io.write_png(out / f"{demo.name}.png",
-                           display.display_rgb(film.xyz, film.variance if denoise else None), demo.exposure)
-        results[demo.name] = result
-        extra = f" + energy views {result.figures['energy']['seconds']:.1f} s" if "energy" in result.figures else ""
-        log(f"\n{demo.name}: {demo.title} — {width}×{height}, {samples(demo.spp)} spp, {rendered.seconds:.1f} s{extra}")
-        for line in demo.lines(result.figures):
-            log(f"  {line}")
-    results["metamer_design"] = design
+    with addon_registered():
+        for demo in wanted:
+            result = render_demo(demo, blends, scale, quality)
+            figures_start = time.perf_counter()
+            result.figures = demo.figures(result.scene, result.xyz)
+            if demo.name == "fluorescent_frog":
+                result.figures["energy"] = frog_energy(metrics.medium(result.scene, "frog"), 24,
+                                                       max(2, round(64 * quality)), 16)
+            figures_seconds = time.perf_counter() - figures_start
+            film_rgb = colorimetry.xyz_to_rgb(result.xyz)
+            image_io.write_exr(out / f"{demo.name}.exr", result.xyz, film_rgb, result.variance)
+            image_io.write_png(out / f"{demo.name}.png",
+                               display.display_rgb(result.xyz, result.variance if denoise else None), result.exposure)
+            results[demo.name] = result
+            camera = result.scene.camera
+            log(f"\n{demo.name}: {demo.title} — {build_blends.DEMO_SCENES[demo.name].blend} "
+                f"scene {build_blends.DEMO_SCENES[demo.name].scene!r}, {camera.width}×{camera.height}, "
+                f"{result.scene.settings.spp} spp, render {result.seconds:.1f} s, figures {figures_seconds:.1f} s")
+            for line in demo.lines(result.figures):
+                log(f"  {line}")
     return results
 
 
 def write_summary(out: Path, results: dict, seconds: float) -> None:
     """The contact sheet, its captions as text, and figures.json."""
-    demos = [r for name, r in results.items() if name != "metamer_design"]
+    demos = list(results.values())
     tiles, captions = [], []
     for r in demos:
         caption = [r.demo.title, r.demo.lines(r.figures)[0]]
-        rgb = display.display_rgb(r.xyz, r.variance) * 2.0 ** r.demo.exposure
+        rgb = display.display_rgb(r.xyz, r.variance) * 2.0 ** r.exposure
         tiles.append((rgb, caption))
         captions.append(f"{r.demo.name}.png: {caption[0]} — {caption[1]}")
     drawn = display.contact_sheet(out / "contact_sheet.png", tiles, f"Spectral volume demos — {seconds:.0f} s")
     (out / "contact_sheet.txt").write_text("\n".join(captions) + "\n", encoding="utf-8")
     figures = {r.demo.name: {"seconds": r.seconds, **r.figures} for r in demos}
-    figures["metamer_design"] = results["metamer_design"]
     (out / "figures.json").write_text(json.dumps(figures, indent=2, default=float), encoding="utf-8")
     if not drawn:
         print("(captions could not be drawn on the sheet; they are in contact_sheet.txt)")
@@ -183,17 +201,21 @@ def write_summary(out: Path, results: dict, seconds: float) -> None:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default: out/)")
-    parser.add_argument("--scale", type=float, default=1.0, help=f"resolution scale (1.0: {WIDTH}×{HEIGHT})")
-    parser.add_argument("--quality", type=float, default=1.0, help="samples per pixel scale (1.0: each demo's own)")
-    parser.add_argument("--only", nargs="*", help="render only these demos")
+    parser.add_argument("--scale", type=float, default=1.0, help="resolution scale (1.0: each scene's, 256×160)")
+    parser.add_argument("--quality", type=float, default=1.0, help="samples per pixel scale (1.0: each scene's own)")
+    parser.add_argument("--only", nargs="*", choices=[demo.name for demo in DEMOS], help="render only these demos")
     parser.add_argument("--no-denoise", action="store_true", help="PNGs of the raw film (the sheet is always denoised)")
+    parser.add_argument("--blends", type=Path, default=build_blends.HERE,
+                        help="folder of the .blend files (default: demo_blends/)")
     args = parser.parse_args(argv)
     start = time.perf_counter()
     args.out.mkdir(parents=True, exist_ok=True)
-    results = run(args.out, args.scale, args.quality, args.only, denoise=not args.no_denoise)
+    results = run(args.out, args.scale, args.quality, args.only, denoise=not args.no_denoise, blends=args.blends)
     seconds = time.perf_counter() - start
     write_summary(args.out, results, seconds)
-    print(f"\nall demos rendered in {seconds:.1f} s; wrote {args.out}/*.exr, *.png, contact_sheet.png, figures.json")
+    rendering = sum(result.seconds for result in results.values())
+    print(f"\nall demos done in {seconds:.1f} s (rendering {rendering:.1f} s of it); wrote {args.out}/*.exr, *.png, "
+          "contact_sheet.png, figures.json")
     return 0
 
 

@@ -1,9 +1,8 @@
-"""The demo scenes as tracer `Scene`s, built in code: no files, no downloads.
+"""The demo scenes as tracer `Scene`s, built in code: no files, no downloads. The one source of their numbers.
 
-Each builder takes the image size and samples per pixel and returns a `Scene`; the figures that
-prove each phenomenon are computed from the rendered film by `metrics`. This step builds the demos as
-tracer scenes only: turning them into .blend files through the add-on (issue 6's `*.blend`) is a
-later step, which should reproduce these settings (they are all plain numbers and spectra here).
+Each builder takes the image size and samples per pixel and returns a `Scene`. `build_blends` writes
+these scenes as .blend files (tests/demos/test_blends.py checks that each file exports back to the
+scene built here); `make demo` renders the files and `metrics` computes the figures from the films.
 
 World conventions: Blender's, z up, lengths in Blender units. Directions to lights are given as
 (elevation, azimuth) in degrees, azimuth measured from +y (the direction the cameras look along)
@@ -210,7 +209,8 @@ def both_sides(part):
 # ----------------------------------------------------------------------------- fluorescent frog
 
 # The lamp: only 275–450 nm (UV plus violet), as in the report.
-UV_LAMP = spectra.window(spectra.constant(1.0), 275.0, 450.0)
+UV_WINDOW = (275.0, 450.0)
+UV_LAMP = spectra.window(spectra.constant(1.0), *UV_WINDOW)
 # The fluorophore absorbs UV (and a little violet) and re-emits green around 540 nm.
 FROG_EXCITATION = spectra.Spectrum(spectra.gaussian(340.0, 20.0).values * (1.0 - smooth_step(410.0, 20.0)))
 FROG_EMISSION = spectra.gaussian(540.0, 30.0)
@@ -282,10 +282,11 @@ def fibonacci_directions(count: int) -> np.ndarray:
 FROG_ENERGY_LAMP = sun(UV_LAMP, 0.05, elevation=90.0, name="UV lamp overhead")  # no angle: never seen
 
 
-def frog_energy_views(size: int, spp: int, views: int = 16) -> list[Scene]:
-    """The frog's body alone under a lamp straight above it, seen by orthographic cameras from
-    `views` directions over the whole sphere, each framing all of it: what `metrics.frog_energy`
-    integrates into the power the frog sends out."""
+def frog_energy_views(size: int, spp: int, views: int = 16, body: Medium | None = None) -> list[Scene]:
+    """The frog's body (`body`, default `frog_medium()`) alone under a lamp straight above it, seen by
+    orthographic cameras from `views` directions over the whole sphere, each framing all of it: what
+    `metrics.emitted_power` integrates into the power the frog sends out."""
+    body = frog_medium() if body is None else body
     lo, hi = np.array(FROG_BOX[0]), np.array(FROG_BOX[1])
     centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
     cameras = []
@@ -294,7 +295,7 @@ def frog_energy_views(size: int, spp: int, views: int = 16) -> list[Scene]:
         to_world = look_at(centre + 3.0 * radius * view, centre, up)
         cameras.append(Camera(to_world=to_world, width=size, height=size, kind="orthographic",
                               ortho_scale=2.0 * radius))
-    return [scene(cam, (frog_medium(),), (FROG_ENERGY_LAMP,), spp) for cam in cameras]
+    return [scene(cam, (body,), (FROG_ENERGY_LAMP,), spp) for cam in cameras]
 
 
 # ----------------------------------------------------------------------------- metamerism: two cubes
@@ -330,9 +331,10 @@ def two_cubes(albedo_left, albedo_right, light: spectra.Spectrum, width: int, he
 LOW_END = 0.05 + 0.85 * (1.0 - smooth_step(500.0, 20.0))
 HIGH_END = 0.85 * smooth_step(610.0, 20.0)
 SIMPLE_ALBEDOS = (spectra.Spectrum(LOW_END), spectra.Spectrum(LOW_END + HIGH_END))
+LOWER_HALF = (300.0, 570.0)  # D65's part where the two albedos agree
 LIGHTS = {
     "D65": spectra.illuminant("D65"),
-    "D65 lower half": spectra.window(spectra.illuminant("D65"), 300.0, 570.0),
+    "D65 lower half": spectra.window(spectra.illuminant("D65"), *LOWER_HALF),
     "A": spectra.illuminant("A"),
 }
 
@@ -363,6 +365,7 @@ FIRE_BOX = ((-0.7, -0.7, 0.0), (0.7, 0.7, 2.4))
 FLAME_HEIGHT = 1.25
 FIRE_TEMPERATURES = (1000.0, 2000.0)  # kelvin: the flame's edge and its hottest core
 FIRE_INTENSITY = 1.0  # scales the blackbody radiance (W·m⁻²·sr⁻¹·nm⁻¹)
+MOON_TEMPERATURE = 9000.0  # kelvin: the colour of the bluish moonlight on the smoke
 
 
 def fire_grids() -> tuple[Grid, Grid, Grid]:
@@ -394,6 +397,6 @@ def fire(width: int, height: int, spp: int) -> Scene:
     flame = medium("flame", soot, 5.0, albedo=0.2, emission=emission)
     plume = medium("smoke", smoke, 6.0, albedo=0.7)
     # A bluish moon from above and behind lights the smoke; the background stays black.
-    moon = sun(spectra.blackbody(9000.0), 1.0, elevation=45.0, azimuth=150.0, name="moon")
+    moon = sun(spectra.blackbody(MOON_TEMPERATURE), 1.0, elevation=45.0, azimuth=150.0, name="moon")
     cam = camera((0.0, -4.6, 1.0), (0.0, 0.0, 1.0), width, height, 48.0)
     return scene(cam, (flame, plume), (moon,), spp)

@@ -22,8 +22,10 @@ def resolution(scene) -> tuple[int, int]:
 
 
 def camera_to_world(matrix_world) -> np.ndarray:
+    """C-ordered (NumPy makes Fortran-ordered arrays of mathutils matrices, and the Numba kernel would
+    compile a second specialisation for them)."""
     location, rotation, _scale = matrix_world.decompose()
-    return np.array(Matrix.LocRotScale(location, rotation, None), dtype=np.float64)
+    return np.ascontiguousarray(np.array(Matrix.LocRotScale(location, rotation, None), dtype=np.float64))
 
 
 def export_camera(scene, camera_object=None) -> Camera:

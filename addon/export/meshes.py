@@ -15,6 +15,7 @@ from ..tracer.scene import Grid
 
 MAX_VOXELS = 512**3
 _EPSILON = 1e-6
+_FIT_TOLERANCE = 1e-4  # fraction of a voxel by which a mesh may exceed a whole number of voxels
 
 
 def _world_triangles(obj):
@@ -48,7 +49,9 @@ def voxelise(obj, voxel_size: float) -> Grid:
     if len(triangles) == 0:
         raise SpectralError(f"mesh {obj.name!r} has no faces to fill with its volume material")
     low, high = vertices.min(axis=0), vertices.max(axis=0)
-    cells = np.maximum(np.ceil((high - low) / voxel_size).astype(int), 1) + 2  # an empty voxel on every side
+    # Vertices are float32: a box 1 unit wide at x = 0.85 spans 1.0000000x, which must stay 1 / voxel_size voxels.
+    spans = np.ceil((high - low) / voxel_size - _FIT_TOLERANCE)
+    cells = np.maximum(spans.astype(int), 1) + 2  # an empty voxel on every side
     if np.prod(cells.astype(np.float64)) > MAX_VOXELS:
         raise SpectralError(f"mesh {obj.name!r}: voxel size {voxel_size:g} gives {' × '.join(map(str, cells))} "
                             "voxels, too many: increase the object's Voxel Size")

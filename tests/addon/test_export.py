@@ -117,6 +117,22 @@ def test_mesh_with_spectral_material_is_voxelised(registered):
     np.testing.assert_allclose(world.max(axis=0), [0.45, 0.45, 0.95], atol=1e-6)
 
 
+def test_voxelising_ignores_float32_rounding_of_the_mesh(registered):
+    """A unit cube with vertices at x = 0.35 and 1.35 spans 1.0000000x in float32: still 16 voxels of
+    1/16, centred in it."""
+    add_camera()
+    add_sun()
+    mesh = bpy.data.meshes.new("Cube")
+    corners = [(x, y, z) for x in (0.35, 1.35) for y in (-0.5, 0.5) for z in (0.0, 1.0)]
+    mesh.from_pydata(corners, [], [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)])
+    cube = link(bpy.data.objects.new("Cube", mesh))
+    cube.data.materials.append(spectral_material())
+    cube.spectral.voxel_size = 1.0 / 16.0
+    grid = _export().scene.media[0].density
+    assert grid.values.shape == (18, 18, 18) and grid.values.sum() == 16**3
+    np.testing.assert_allclose(grid.index_to_world[:3, 3], [0.85 - 17 / 32, -17 / 32, 0.5 - 17 / 32], atol=1e-6)
+
+
 def _fake_fluid_domain(tmp_path, frames=(1,)):
     """A smoke domain whose cache folder is written with OpenVDB (never baked, never evaluated:
     its modifier is hidden so Mantaflow does not start)."""
@@ -187,6 +203,7 @@ def test_camera_conventions(registered):
     np.testing.assert_allclose(exported.to_world[:3, :3] @ [0, 0, -1], [0, 1, 0], atol=1e-6)  # looks along +Y
     np.testing.assert_allclose(exported.to_world[:3, 3], [1, 2, 3])
     np.testing.assert_allclose(np.linalg.norm(exported.to_world[:3, :3], axis=0), 1.0)  # scale dropped
+    assert exported.to_world.flags.c_contiguous  # as the tracer's own cameras: one kernel specialisation
     data.type, data.ortho_scale = "ORTHO", 7.0
     exported = camera_export.export_camera(scene)
     assert exported.kind == "orthographic" and exported.ortho_scale == 7.0

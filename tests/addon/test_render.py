@@ -11,6 +11,7 @@ from addon import cli
 from addon.export.scene import export_scene
 from addon.render_job import RenderJob
 from addon.tracer import image_io
+from addon.tracer.errors import SpectralError
 from addon.tracer.render import render
 from tests.addon.builders import basic_scene
 
@@ -139,6 +140,23 @@ def test_cli_reports_bad_input_and_keeps_the_output(registered, tmp_path):
     missing = _run_cli("render", tmp_path / "nowhere.blend", "--out", out)
     assert missing.returncode == 1 and "nowhere.blend does not exist" in missing.stderr
     assert _run_cli("draw").returncode == 2
+
+
+def test_cli_renders_the_scene_it_is_asked_for(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    bpy.ops.scene.new(type="LINK_COPY")  # the same objects, its own resolution; it becomes the active scene
+    wide = bpy.context.scene
+    wide.name = "Wide"
+    wide.render.resolution_x, wide.render.resolution_y = 20, 10
+    bpy.context.window.scene = scene  # the file opens on the first scene
+    blend = tmp_path / "two scenes.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    out = tmp_path / "wide.exr"
+    done = _run_cli("render", blend, "--scene", "Wide", "--out", out, "--spp", 1, "--quiet")
+    assert done.returncode == 0, done.stderr
+    assert image_io.read_exr(out)["spectral.Y"].shape == (10, 20)
+    with pytest.raises(SpectralError, match=r"has no scene 'Tall'; its scenes: 'Scene', 'Wide'"):
+        cli.open_scene(blend, "Tall")
 
 
 def test_unreachable_scheduler_is_reported_and_writes_nothing(registered, tmp_path):
