@@ -21,7 +21,6 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
 import math
 
 import numpy as np
-import numba
 from numba import njit, prange
 
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
@@ -41,10 +40,6 @@ EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
 # Rows of the per-path spectral cache spec[medium, row, wavelength] (filled when wavelengths change).
 SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO = 0, 1, 2, 3, 4
 SPEC_ROWS = 5
-# Threads take pixels in chunks of this many as they become free (dynamic scheduling): with Numba's
-# default of one equal share per thread, the thread whose strip crosses the dense cloud finishes last
-# and the others wait (16 threads rendered only 3.2× faster than 2).
-PIXELS_PER_CHUNK = 16
 
 
 # ----------------------------------------------------------------------------- small helpers
@@ -699,59 +694,44 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, 
         xyz[2] += scale * _table(ks.xyz_weights[2], lam_cam[i])
 
 
-@njit(inline="always")
-def _render_pixel(ks, x0, y0, tile_width, index, sample_begin, sample_end, seed, band, media, n,
-                  sum_xyz, sum_sq):
-    """Samples [sample_begin, sample_end) of the tile's pixel number `index` (row-major) into the accumulators."""
-    row, column = index // tile_width, index % tile_width
-    px, py = x0 + column, y0 + row
-    pixel = py * ks.width + px
-    lam_cam = np.empty(MAX_LAMBDAS)
-    pdf_cam = np.empty(MAX_LAMBDAS)
-    lams = np.empty(MAX_LAMBDAS)
-    spec = np.empty((media, SPEC_ROWS, MAX_LAMBDAS))
-    beta = np.empty(MAX_LAMBDAS)
-    r_u = np.empty(MAX_LAMBDAS)
-    r_l = np.empty(MAX_LAMBDAS)
-    radiance = np.empty(MAX_LAMBDAS)
-    scratch = np.empty((14, MAX_LAMBDAS))
-    medium_s = np.zeros((media, 2 * MAX_LAMBDAS))
-    medium_fl = np.zeros((media, 2 * MAX_LAMBDAS))
-    state_i = np.zeros((media, 7), dtype=np.int64)
-    state_f = np.zeros((media, 17))
-    stream = np.zeros(2, dtype=np.uint64)
-    xyz = np.zeros(3)
-    for sample in range(sample_begin, sample_end):
-        stream[0] = path_key(seed, band, pixel, sample)
-        stream[1] = 0
-        xyz[:] = 0.0
-        _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, r_l, radiance,
-                    scratch, medium_s, medium_fl, state_i, state_f, xyz)
-        for c in range(3):
-            sum_xyz[row, column, c] += xyz[c]
-            sum_sq[row, column, c] += xyz[c] * xyz[c]
-
-
 @njit(parallel=True, nogil=True, cache=True)
-def _render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
-    media = max(ks.density_scale.shape[0], 1)
-    n = ks.wavelengths_per_path
-    for index in prange(tile_width * tile_height):
-        _render_pixel(ks, x0, y0, tile_width, index, sample_begin, sample_end, seed, band, media, n, sum_xyz, sum_sq)
-
-
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
-    # The chunk size is the calling thread's setting (set here, not in the kernel: a `with
-    # parallel_chunksize` block inside a cached kernel fails to cache in Numba 0.68).
-    previous = numba.set_parallel_chunksize(PIXELS_PER_CHUNK)
-    try:
-        _render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq)
-    finally:
-        numba.set_parallel_chunksize(previous)
+    media = max(ks.density_scale.shape[0], 1)
+    n = ks.wavelengths_per_path
+    for index in prange(tile_width * tile_height):
+        row, column = index // tile_width, index % tile_width
+        px, py = x0 + column, y0 + row
+        pixel = py * ks.width + px
+        lam_cam = np.empty(MAX_LAMBDAS)
+        pdf_cam = np.empty(MAX_LAMBDAS)
+        lams = np.empty(MAX_LAMBDAS)
+        spec = np.empty((media, SPEC_ROWS, MAX_LAMBDAS))
+        beta = np.empty(MAX_LAMBDAS)
+        r_u = np.empty(MAX_LAMBDAS)
+        r_l = np.empty(MAX_LAMBDAS)
+        radiance = np.empty(MAX_LAMBDAS)
+        scratch = np.empty((14, MAX_LAMBDAS))
+        medium_s = np.zeros((media, 2 * MAX_LAMBDAS))
+        medium_fl = np.zeros((media, 2 * MAX_LAMBDAS))
+        state_i = np.zeros((media, 7), dtype=np.int64)
+        state_f = np.zeros((media, 17))
+        stream = np.zeros(2, dtype=np.uint64)
+        xyz = np.zeros(3)
+        for sample in range(sample_begin, sample_end):
+            stream[0] = path_key(seed, band, pixel, sample)
+            stream[1] = 0
+            xyz[:] = 0.0
+            _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, r_l, radiance,
+                        scratch, medium_s, medium_fl, state_i, state_f, xyz)
+            for c in range(3):
+                sum_xyz[row, column, c] += xyz[c]
+                sum_sq[row, column, c] += xyz[c] * xyz[c]
 
 
 def set_threads(count: int) -> None:
     """Use `count` threads (at most the number Numba was started with)."""
+    import numba
+
     numba.set_num_threads(max(1, min(count, numba.config.NUMBA_NUM_THREADS)))
