@@ -206,7 +206,7 @@ def main(argv=None) -> int:
         dr.set_thread_count(args.threads)
     print(f"machine: {machine()}; Dr.Jit {dr.__version__} with {dr.thread_count()} threads, Mitsuba {mi.__version__} "
           f"{mi.variant()}")
-    print(f"ours: 4 wavelengths per path (hero + spectral MIS, visible-importance λ), majorant grid; Mitsuba: "
+    print(f"ours: 4 wavelengths per path (hero + spectral MIS, colour-importance λ), majorant grid; Mitsuba: "
           f"{args.integrator}, 4 wavelengths per path, one majorant for the whole medium"
           + ("\n[QUICK MODE: tiny sizes and budgets, figures are not representative]" if args.quick else ""))
     if args.check:

@@ -4,9 +4,9 @@ reference (issue 3, Performance).
 Methods, all in our tracer on the same scene:
 - report:        ONE wavelength per path, uniform over 380–700 nm (the report's §3.2), exact CIE 1931 CMFs;
 - report+wyman1: the same with the Wyman–Sloan–Shirley single-lobe CMF fit (the report's §3.3 eq. 1–3);
-- ours:          4 wavelengths per path (hero + 3 stratified companions, spectral MIS), visible-importance
+- ours:          4 wavelengths per path (hero + 3 stratified companions, spectral MIS), colour-importance
                  sampling over 360–830 nm, exact CIE 1931 CMFs (the tracer's defaults).
-`--ablation` adds "ours 1λ" (one visible-importance wavelength) and "4λ uniform" (4 wavelengths, uniform
+`--ablation` adds "ours 1λ" (one colour-importance wavelength) and "4λ uniform" (4 wavelengths, uniform
 over 380–700 nm) to show which change buys what.
 
 The reference is ours with many samples. Each method renders for the same wall-clock budget (time per
