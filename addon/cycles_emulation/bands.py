@@ -4,7 +4,8 @@ bands are packed into Cycles renders.
 Band k covers the grid nodes lo_k ≤ λ < hi_k (the last band includes its upper edge), so the bands
 partition the rendered range and their XYZ weights w_k = Σ_band cmf · Δλ / Σ ȳ · Δλ (the tracer's
 quadrature, `colorimetry.xyz_weights`) add up to the XYZ of a constant spectrum of 1: Y = 1 over the
-visible range. A spectrum enters a band as its mean weighted by x̄ + ȳ + z̄ (what the eye sees of the
+visible range. Shaped by a reference spectrum (the scene's lights), the weights make that spectrum's XYZ
+exact however wide the bands: the light's colour is not distorted by the band approximation. A spectrum enters a band as its mean weighted by x̄ + ȳ + z̄ (what the eye sees of the
 band), or its plain mean where the band lies outside the colour matching functions.
 
 Cycles renders three bands at once in its R, G and B channels, but its phase functions do not vary per
@@ -52,9 +53,19 @@ def split(lo: float, hi: float, count: int) -> Bands:
     return Bands(tuple(float(edge) for edge in [ranges[0][0]] + [band_hi for _lo, band_hi in ranges]))
 
 
-def xyz_weights(bands: Bands, cmf: str = "cie1931") -> np.ndarray:
-    """(K, 3): XYZ = Σ_k value_k · weights[k] for a spectrum whose band means are value_k."""
-    return bands.masks.astype(np.float64) @ colorimetry.xyz_weights(cmf).T * LAMBDA_STEP
+def xyz_weights(bands: Bands, cmf: str = "cie1931", reference=None) -> np.ndarray:
+    """(K, 3): XYZ = Σ_k value_k · weights[k] for a spectrum with band means value_k shaped within each band
+    like `reference` (default flat): weights[k] = Σ_band cmf · reference · Δλ / band mean of reference.
+    Exact for the reference itself (and any multiple of it per band), so for a light of that spectrum."""
+    masks = bands.masks.astype(np.float64)
+    if reference is None:
+        return masks @ colorimetry.xyz_weights(cmf).T * LAMBDA_STEP
+    reference = np.asarray(reference, dtype=np.float64)
+    means = band_means(reference, bands, cmf)
+    flat = xyz_weights(bands, cmf)
+    shaped = masks @ (colorimetry.xyz_weights(cmf) * reference).T * LAMBDA_STEP
+    usable = means > 1e-12 * max(float(means.max()), 1e-300)
+    return np.where(usable[:, None], shaped / np.where(usable, means, 1.0)[:, None], flat)
 
 
 def band_means(values, bands: Bands, cmf: str = "cie1931") -> np.ndarray:

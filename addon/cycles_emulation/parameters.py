@@ -6,7 +6,8 @@ the same material definition. In band k a medium has extinction ext_k, albedo_k(
 scattering coefficient over that of the extinction, per density level, so σ_s is preserved), anisotropy
 g_k and the fluorophore's excitation (absorption only: Cycles cannot re-emit at another wavelength). A
 light's colour in band k is the band mean of its spectrum scaled to luminance 1 (`compile.luminance_scale`),
-its Cycles strength stays Blender's, so XYZ = Σ_k render_k · w_k (`bands.xyz_weights`) matches the tracer.
+its Cycles strength stays Blender's, so XYZ = Σ_k render_k · w_k (`bands.xyz_weights`, shaped within each
+band by the lights' spectra) matches the tracer.
 """
 
 import dataclasses
@@ -18,6 +19,7 @@ from ..tracer import colorimetry, spectra
 from ..tracer.compile import default_band, luminance_scale
 from ..tracer.errors import SpectralError
 from ..tracer.scene import Light, Medium, Scene
+from ..tracer.wavelengths import GRID
 from . import bands as bandlib
 
 FLUORESCENCE_WARNING = ("material of {name!r} fluoresces: Cycles cannot re-emit light at another wavelength, "
@@ -95,6 +97,19 @@ def emitter_bands(rgb, bands: bandlib.Bands, cmf: str = "cie1931", method: str =
     return peak * bandlib.band_means(spectrum, bands, cmf)
 
 
+def reference_spectrum(lights) -> np.ndarray | None:
+    """The scene's illumination shape: the lights' spectra at luminance 1, weighted by their strengths
+    (None without lights: flat). Band weights shaped by it (`bands.xyz_weights`) render the lights' own
+    colours exactly."""
+    total = np.zeros(GRID.size)
+    for light in lights:
+        unit = dataclasses.replace(light, strength=1.0)
+        total += light.strength * light.spectrum.values * luminance_scale(unit)
+        if light.horizon_spectrum is not None:
+            total += light.strength * light.horizon_spectrum.values * luminance_scale(unit, light.horizon_spectrum)
+    return total if total.any() else None
+
+
 def plan(scene: Scene, band_count: int) -> Plan:
     """The emulation of `scene` with `band_count` bands over the tracer's rendered wavelength range."""
     settings = scene.settings
@@ -113,6 +128,7 @@ def plan(scene: Scene, band_count: int) -> Plan:
                          None if horizon is None else light_bands(world, bands, settings.cmf, horizon))
     colours = {light.name: light_bands(light, bands, settings.cmf) for light in scene.lights if light is not world}
     keys = [tuple(medium.phase_key(k) for medium in media) for k in range(bands.count)]
-    return Plan(bands=bands, weights=bandlib.xyz_weights(bands, settings.cmf), media=media, light_colours=colours,
+    weights = bandlib.xyz_weights(bands, settings.cmf, reference_spectrum(scene.lights))
+    return Plan(bands=bands, weights=weights, media=media, light_colours=colours,
                 world=world, world_colours=world_colours, renders=bandlib.pack(keys), cmf=settings.cmf,
                 warnings=tuple(warnings))

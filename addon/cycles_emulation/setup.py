@@ -3,7 +3,8 @@ volume and surface materials for the render's bands; every change through `state
 
 Cycles is set to be unbiased and comparable with the tracer: CPU, no denoising, adaptive sampling, light
 clamping, light threshold or path guiding; a 1-pixel box filter (the tracer's pixel); volume bounces = the
-tracer's max bounces; compositing and the sequencer off; output a 32-bit float EXR of the scene-linear
+tracer's max bounces; compositing and the sequencer off; persistent data on (the two halves of a render
+share Cycles' scene); output a 32-bit float EXR of the scene-linear
 R, G, B (three bands, never mixed: Cycles keeps colour channels apart).
 """
 
@@ -17,16 +18,17 @@ from .parameters import Plan
 LIGHT_TYPES = ("SUN", "POINT", "SPOT", "AREA")
 
 
-def cycles_settings(borrowed, scene, *, samples: int, seed: int, max_bounces: int, shader: str, filepath: str):
-    render, cycles = scene.render, scene.cycles
+def cycles_settings(borrowed, scene, *, samples: int, max_bounces: int, shader: str):
+    """Everything but the seed and the output file, which change between the two halves."""
+    render, cycles, image = scene.render, scene.cycles, scene.render.image_settings
     values = [
-        (render, "engine", "CYCLES"), (render, "filepath", filepath), (render, "use_compositing", False),
+        (image, "color_depth", image.color_depth), (image, "color_mode", image.color_mode),  # restored last
+        (render, "engine", "CYCLES"), (render, "use_persistent_data", True), (render, "use_compositing", False),
         (render, "use_sequencer", False), (render, "film_transparent", False), (render, "use_border", False),
         (render, "use_multiview", False),
-        (render.image_settings, "file_format", "OPEN_EXR"), (render.image_settings, "color_depth", "32"),
-        (render.image_settings, "color_mode", "RGB"),
+        (image, "file_format", "OPEN_EXR"), (image, "color_depth", "32"), (image, "color_mode", "RGB"),
         (cycles, "device", "CPU"), (cycles, "shading_system", shader == "OSL"), (cycles, "samples", samples),
-        (cycles, "seed", seed), (cycles, "use_animated_seed", False), (cycles, "use_denoising", False),
+        (cycles, "use_animated_seed", False), (cycles, "use_denoising", False),
         (cycles, "use_adaptive_sampling", False), (cycles, "pixel_filter_type", "BOX"), (cycles, "filter_width", 1.0),
         (cycles, "volume_bounces", max_bounces), (cycles, "max_bounces", max(cycles.max_bounces, max_bounces)),
         (cycles, "sample_clamp_direct", 0.0), (cycles, "sample_clamp_indirect", 0.0),

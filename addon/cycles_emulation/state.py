@@ -2,7 +2,9 @@
 
 Every change the emulation makes for one Cycles render goes through `Borrowed.set` (render settings,
 material slots, light colours, the World); `restore()` puts back the old values and deletes what
-`keep` collected, so a finished, cancelled or failed render leaves the scene as it was.
+`keep` collected, so a finished, cancelled or failed render leaves the scene as it was. A setting that
+another one limits (an image format's colour depths) is recorded before the other changes, with its own
+value (`set(owner, name, getattr(owner, name))`), so it gets that value back after the other.
 """
 
 import bpy

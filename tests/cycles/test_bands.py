@@ -121,3 +121,13 @@ def test_composite_film_weights_and_variance():
     np.testing.assert_allclose(film.xyz, [[[2.0, 2.0, 0.0], [2.0, 2.0, 0.0]]])
     np.testing.assert_allclose(film.variance, [[[1.0, 0.0, 0.0], [0.0, 4.0, 0.0]]])
     np.testing.assert_allclose(film.rgb(), colorimetry.xyz_to_rgb(film.xyz))
+
+
+@pytest.mark.parametrize("count", [3, 6, 12])
+def test_weights_shaped_by_a_light_render_its_colour_exactly(count):
+    split = bands.split(360, 830, count)
+    d65 = spectra.illuminant("D65").values * ((GRID >= 360) & (GRID <= 830))
+    weights = bands.xyz_weights(split, reference=d65)
+    np.testing.assert_allclose(bands.band_means(d65, split) @ weights, colorimetry.spectrum_to_xyz(d65), rtol=1e-10)
+    flat = bands.xyz_weights(split)
+    assert np.abs(bands.band_means(d65, split) @ flat / colorimetry.spectrum_to_xyz(d65) - 1).max() > 1e-3
