@@ -259,3 +259,21 @@ def test_fluorescence_error_against_the_tracer(registered, tmp_path):
           f"tracer ΔE00 {missing_e:.2f}, luminance {100 * missing_y:.1f} % lower")
     assert delta_e < 1.0 and z < NOISE_BOUND
     assert missing_e > 2.0 and missing_y > 0.05  # the glow the emulation leaves out is visible
+
+
+def test_panels_say_what_the_emulation_cannot_do(registered):
+    from addon.ui import material as material_ui
+    from addon.ui import render as render_ui
+    from tests.addon.recording import RecordingLayout
+
+    material = bpy.data.materials.new("Dye")
+    material.spectral.enabled = material.spectral.use_fluorescence = True
+    scene = bpy.context.scene
+    for renderer, shown in (("TRACER", False), ("CYCLES", True)):
+        scene.spectral.renderer = renderer
+        fluorescence, settings = RecordingLayout(), RecordingLayout()
+        material_ui.draw_fluorescence(fluorescence, material, scene.spectral.renderer)
+        render_ui.draw_render_main(settings, scene)
+        assert any("nothing is re-emitted" in text for text in fluorescence.texts()) == shown
+        assert any("no re-emission" in text for text in settings.texts()) == shown
+        assert (("prop", (scene.spectral, "emulation_bands"), {}) in settings.calls) == shown
