@@ -84,9 +84,9 @@ def build_scene(args, folder: Path):
     sun.rotation_euler = _z_towards(towards)
     scene.collection.objects.link(sun)
     camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    camera.matrix_world = [list(row) for row in look_at(EYE, TARGET)]
-    camera.data.sensor_fit, camera.data.angle = "AUTO", math.radians(40.0)
     scene.collection.objects.link(camera)
+    camera.location, camera.rotation_euler = EYE, _euler(look_at(EYE, TARGET))
+    camera.data.sensor_fit, camera.data.angle = "AUTO", math.radians(40.0)
     scene.camera = camera
     return scene
 
@@ -96,6 +96,12 @@ def _z_towards(direction):
     from mathutils import Vector
 
     return Vector((0.0, 0.0, 1.0)).rotation_difference(Vector(direction)).to_euler()
+
+
+def _euler(to_world):
+    from mathutils import Matrix
+
+    return Matrix([list(row) for row in to_world]).to_euler()
 
 
 def emulate(scene, tracer_scene, bands: int, spp: int, shader: str = "SVM"):

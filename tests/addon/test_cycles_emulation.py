@@ -277,3 +277,22 @@ def test_panels_say_what_the_emulation_cannot_do(registered):
         assert any("nothing is re-emitted" in text for text in fluorescence.texts()) == shown
         assert any("no re-emission" in text for text in settings.texts()) == shown
         assert (("prop", (scene.spectral, "emulation_bands"), {}) in settings.calls) == shown
+
+
+def test_cli_follows_the_scene_renderer(registered, tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    scene, _cloud = blob_scene(tmp_path, width=16, height=12)
+    scene.spectral.renderer, scene.spectral.emulation_bands, scene.spectral.samples = "CYCLES", 3, 2
+    blend = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    out = tmp_path / "cli.exr"
+    done = subprocess.run([sys.executable, "-m", "addon.cli", "render", str(blend), "--out", str(out), "--quiet"],
+                          cwd=Path(__file__).resolve().parents[2], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert "Cycles emulation, 1 × 2 Cycles renders" in done.stdout
+    channels = image_io.read_exr(out)
+    assert channels["spectral.Y"].shape == (12, 16) and channels["spectral.Y"].max() > 0.01
+    assert "variance.Y" in channels
