@@ -72,8 +72,11 @@ def _svm(tree, density, medium: MediumBands, members, g: float):
     absorption = _vector_math(tree, "MULTIPLY_ADD", channels(medium.excitation * scale, members), density,
                               _vector_math(tree, "SUBTRACT", sigma_t, scattering))
     node = tree.nodes.new("ShaderNodeVolumeCoefficients")
-    node.phase = "RAYLEIGH" if medium.phase == "rayleigh" else "HENYEY_GREENSTEIN"
-    node.inputs["Anisotropy"].default_value = g
+    if medium.phase == "rayleigh":
+        node.phase = "RAYLEIGH"  # no Anisotropy input then
+    else:
+        node.phase = "HENYEY_GREENSTEIN"
+        node.inputs["Anisotropy"].default_value = g
     tree.links.new(scattering, node.inputs["Scatter Coefficients"])
     tree.links.new(absorption, node.inputs["Absorption Coefficients"])
     return node.outputs["Volume"]

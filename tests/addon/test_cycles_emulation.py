@@ -80,8 +80,10 @@ def _cross_check(scene, bands, tracer_spp, cycles_spp):
 
 
 @pytest.mark.slow
-def test_constant_albedo_agrees_with_the_tracer(registered, tmp_path):
-    scene, _cloud = blob_scene(tmp_path)
+@pytest.mark.parametrize("phase", ["hg", "rayleigh"])
+def test_constant_albedo_agrees_with_the_tracer(registered, tmp_path, phase):
+    scene, cloud = blob_scene(tmp_path)
+    cloud.material_slots[0].material.spectral.phase = phase
     job = _cross_check(scene, bands=6, tracer_spp=256, cycles_spp=64)
     assert job.cycles_renders == 2  # ceil(6 / 3)
 
