@@ -100,6 +100,7 @@ class EmulationJob:
         with tempfile.TemporaryDirectory(prefix="spectral_emulation_") as folder, Borrowed() as borrowed:
             setup.cycles_settings(borrowed, scene, samples=self.samples, max_bounces=self.max_bounces,
                                   shader=self.shader)
+            setup.camera(borrowed, scene)
             objects = list(scene.objects)
             setup.lights(borrowed, objects, self.plan, members)
             setup.world(borrowed, scene, self.plan, members)

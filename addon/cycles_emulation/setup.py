@@ -1,5 +1,6 @@
-"""One Cycles render of the emulation set up on the user's scene: Cycles settings, light and World colours,
-volume and surface materials for the render's bands; every change through `state.Borrowed`.
+"""One Cycles render of the emulation set up on the user's scene: Cycles settings, the camera's clipping,
+light and World colours, volume and surface materials for the render's bands; every change through
+`state.Borrowed`.
 
 Cycles is set to be unbiased and comparable with the tracer: CPU, no denoising, adaptive sampling, light
 clamping, light threshold or path guiding; a 1-pixel box filter (the tracer's pixel); volume bounces = the
@@ -16,6 +17,7 @@ from . import parameters, shaders, surfaces
 from .parameters import Plan
 
 LIGHT_TYPES = ("SUN", "POINT", "SPOT", "AREA")
+CLIP_START, CLIP_END = 1e-6, 1e6  # the camera's range, as unlimited as Blender allows
 
 
 def cycles_settings(borrowed, scene, *, samples: int, max_bounces: int, shader: str):
@@ -37,6 +39,14 @@ def cycles_settings(borrowed, scene, *, samples: int, max_bounces: int, shader: 
     ]
     for owner, attribute, value in values:
         borrowed.set(owner, attribute, value)
+
+
+def camera(borrowed, scene) -> None:
+    """The tracer does not clip camera rays; Cycles starts them at the camera's clip start (0.1 m by
+    default), which skips the medium in front of a camera inside a volume (6 % darker in our test)."""
+    if scene.camera is not None and scene.camera.type == "CAMERA":
+        borrowed.set(scene.camera.data, "clip_start", CLIP_START)
+        borrowed.set(scene.camera.data, "clip_end", max(scene.camera.data.clip_end, CLIP_END))
 
 
 def _light_colour(borrowed, light, colour) -> None:

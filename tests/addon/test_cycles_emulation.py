@@ -112,6 +112,15 @@ def test_wavelength_dependent_anisotropy_agrees_with_the_tracer(registered, tmp_
     assert job.cycles_renders == 10  # g differs in every band: one band per render
 
 
+@pytest.mark.slow
+def test_camera_inside_the_volume_agrees_with_the_tracer(registered, tmp_path):
+    """Cycles would skip the medium within the camera's clip start (0.1): the emulation sets it to ~0."""
+    scene, _cloud = blob_scene(tmp_path)
+    scene.camera.location = (0.0, -0.3, 0.0)
+    job = _cross_check(scene, bands=3, tracer_spp=256, cycles_spp=64)
+    assert job.cycles_renders == 1 and scene.camera.data.clip_start == pytest.approx(0.1)
+
+
 def _surface_scene(tmp_path):
     """The blob in front of a red Principled plane, lit by the sun and an area light, with a sky."""
     scene, cloud = blob_scene(tmp_path, width=24, height=16)
@@ -141,6 +150,7 @@ def _snapshot(scene) -> dict:
     state.update({name: getattr(render, name) for name in (
         "engine", "filepath", "use_persistent_data", "use_compositing", "film_transparent")})
     state["image"] = (render.image_settings.file_format, render.image_settings.color_depth)
+    state["clipping"] = (scene.camera.data.clip_start, scene.camera.data.clip_end)
     state["world"] = scene.world.name if scene.world else None
     state["slots"] = {obj.name: [slot.material.name if slot.material else None for slot in obj.material_slots]
                       for obj in scene.objects}
