@@ -4,7 +4,8 @@ upsampled RGB colours, and the plan of Cycles renders.
 Everything comes from the exported tracer Scene (`addon.export`), so the emulation and the tracer render
 the same material definition. In band k a medium has extinction ext_k, albedo_k(ρ) (band mean of the
 scattering coefficient over that of the extinction, per density level, so σ_s is preserved), anisotropy
-g_k and the fluorophore's excitation (absorption only: Cycles cannot re-emit at another wavelength). A
+g_k, the fluorophore's excitation (absorption only: Cycles cannot re-emit at another wavelength) and
+its blackbody emission as a table over temperature. A
 light's colour in band k is the band mean of its spectrum scaled to luminance 1 (`compile.luminance_scale`),
 its Cycles strength stays Blender's, so XYZ = Σ_k render_k · w_k (`bands.xyz_weights`, shaped within each
 band by the lights' spectra) matches the tracer.
@@ -24,8 +25,20 @@ from . import bands as bandlib
 
 FLUORESCENCE_WARNING = ("material of {name!r} fluoresces: Cycles cannot re-emit light at another wavelength, "
                         "so the emulation renders its excitation as absorption only (no fluorescent glow)")
-EMISSION_WARNING = ("material of {name!r} glows by temperature: blackbody emission is not emulated in Cycles, "
-                    "it renders without it")
+THERMAL_SAMPLES = 24  # temperatures of the blackbody table, evenly over the grid's range
+
+
+@dataclass(frozen=True, eq=False)
+class ThermalBands:
+    """Blackbody emission σ_a · intensity · Planck(λ, T) in the bands: `radiance[i, k]` is the band mean of
+    Planck's law (W·m⁻²·sr⁻¹·nm⁻¹) at `temperatures[i]`, linear in between (0 at and below 0 K); T is the
+    grid value × `scale` + `offset`."""
+
+    temperatures: np.ndarray  # (N,) kelvin, increasing
+    radiance: np.ndarray  # (N, K)
+    intensity: float
+    scale: float
+    offset: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,6 +51,7 @@ class MediumBands:
     albedo: np.ndarray  # (L, K)
     anisotropy: np.ndarray  # (K,)
     phase: str  # "hg" | "rayleigh"
+    thermal: ThermalBands | None = None
 
     def phase_key(self, k: int) -> tuple:
         """What must be equal for two bands to share a Cycles render."""
@@ -68,7 +82,21 @@ def medium_bands(medium: Medium, bands: bandlib.Bands, cmf: str = "cie1931") -> 
     return MediumBands(name=medium.name, density_scale=medium.density_scale, extinction=extinction,
                        excitation=excitation, albedo_densities=np.asarray(medium.albedo_densities, dtype=np.float64),
                        albedo=np.clip(albedo, 0.0, 1.0),
-                       anisotropy=bandlib.band_means(medium.anisotropy.values, bands, cmf), phase=medium.phase)
+                       anisotropy=bandlib.band_means(medium.anisotropy.values, bands, cmf), phase=medium.phase,
+                       thermal=None if medium.emission is None else thermal_bands(medium.emission, bands, cmf))
+
+
+def thermal_bands(emission, bands: bandlib.Bands, cmf: str = "cie1931") -> ThermalBands:
+    """The blackbody table over the temperatures the grid holds (the tracer evaluates Planck's law exactly;
+    this is linear between THERMAL_SAMPLES temperatures)."""
+    kelvin = emission.temperature.values * emission.temperature_scale + emission.temperature_offset
+    hottest = float(np.max(kelvin, initial=0.0))
+    temperatures = np.linspace(0.0, max(hottest, 1.0), THERMAL_SAMPLES)
+    planck = spectra.planck(GRID[None, :], np.maximum(temperatures, 1e-3)[:, None])
+    planck[0] = 0.0
+    return ThermalBands(temperatures=temperatures, radiance=bandlib.band_means(planck, bands, cmf),
+                        intensity=emission.intensity, scale=emission.temperature_scale,
+                        offset=emission.temperature_offset)
 
 
 def light_bands(light: Light, bands: bandlib.Bands, cmf: str = "cie1931", spectrum=None) -> np.ndarray:
@@ -97,11 +125,17 @@ def emitter_bands(rgb, bands: bandlib.Bands, cmf: str = "cie1931", method: str =
     return peak * bandlib.band_means(spectrum, bands, cmf)
 
 
-def reference_spectrum(lights) -> np.ndarray | None:
-    """The scene's illumination shape: the lights' spectra at luminance 1, weighted by their strengths
-    (None without lights: flat). Band weights shaped by it (`bands.xyz_weights`) render the lights' own
-    colours exactly."""
+def reference_spectrum(lights, media=()) -> np.ndarray | None:
+    """The scene's illumination shape: the lights' spectra at luminance 1, weighted by their strengths, plus
+    the glow of each hot medium (Planck's law at its hottest temperature, at luminance 1); None when there
+    is neither (flat). Band weights shaped by it (`bands.xyz_weights`) render these colours exactly."""
     total = np.zeros(GRID.size)
+    for medium in media:
+        if medium.thermal is not None:
+            hottest = medium.thermal.temperatures[-1]
+            glow = spectra.planck(GRID, hottest) if hottest > 0 else np.zeros(GRID.size)
+            luminance = colorimetry.spectrum_to_xyz(glow)[1]
+            total += glow / luminance if luminance > 0 else 0.0
     for light in lights:
         unit = dataclasses.replace(light, strength=1.0)
         total += light.strength * light.spectrum.values * luminance_scale(unit)
@@ -119,7 +153,6 @@ def plan(scene: Scene, band_count: int) -> Plan:
     bands = bandlib.split(lo, hi, band_count)
     media = tuple(medium_bands(medium, bands, settings.cmf) for medium in scene.media)
     warnings = [FLUORESCENCE_WARNING.format(name=m.name) for m in scene.media if m.fluorescence is not None]
-    warnings += [EMISSION_WARNING.format(name=m.name) for m in scene.media if m.emission is not None]
     world = next((light for light in scene.lights if light.kind in ("environment", "sky")), None)
     world_colours = (None, None)
     if world is not None:
@@ -128,7 +161,7 @@ def plan(scene: Scene, band_count: int) -> Plan:
                          None if horizon is None else light_bands(world, bands, settings.cmf, horizon))
     colours = {light.name: light_bands(light, bands, settings.cmf) for light in scene.lights if light is not world}
     keys = [tuple(medium.phase_key(k) for medium in media) for k in range(bands.count)]
-    weights = bandlib.xyz_weights(bands, settings.cmf, reference_spectrum(scene.lights))
+    weights = bandlib.xyz_weights(bands, settings.cmf, reference_spectrum(scene.lights, media))
     return Plan(bands=bands, weights=weights, media=media, light_colours=colours,
                 world=world, world_colours=world_colours, renders=bandlib.pack(keys), cmf=settings.cmf,
                 warnings=tuple(warnings))

@@ -100,12 +100,13 @@ def _sky(tree, background, zenith, horizon) -> None:
     tree.links.new(mix.outputs["Result"], background.inputs["Color"])
 
 
-def _density_attribute(obj) -> str | None:
+def _attribute(obj, grid: str) -> str | None:
+    """The Cycles attribute of a grid of a Volume object or fluid domain (None for meshes)."""
     if obj.type == "VOLUME":
-        return obj.spectral.density_grid
+        return grid
     if fluid_domain(obj) is not None:
-        return ALIASES.get(obj.spectral.density_grid, obj.spectral.density_grid)
-    return None  # a mesh: density 1 inside, as the tracer voxelises it
+        return ALIASES.get(grid, grid)
+    return None
 
 
 def materials(borrowed, objects, plan: Plan, members, shader: str, warnings: list) -> None:
@@ -120,7 +121,9 @@ def materials(borrowed, objects, plan: Plan, members, shader: str, warnings: lis
             if material is None:
                 continue
             if material == volume:
-                replacement = shaders.volume_material(borrowed, medium, members, _density_attribute(obj), shader, text)
+                replacement = shaders.volume_material(
+                    borrowed, medium, members, _attribute(obj, obj.spectral.density_grid), shader, text,
+                    _attribute(obj, volume.spectral.temperature_grid))  # None for meshes: density 1 inside
             elif material.spectral.enabled:
                 continue  # a spectral material on a non-volume: ignored by the tracer as well
             else:

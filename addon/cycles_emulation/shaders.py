@@ -5,7 +5,8 @@ Both compute, per channel c (band k), from the raw density ρ (the object's dens
 mesh as the tracer voxelises it): σ_t = ρ · s · ext_k, albedo_k(ρ) linear between the density levels and
 clamped outside, σ_s = σ_t · albedo, σ_a = σ_t − σ_s + ρ · s · excitation_k; phase Henyey–Greenstein g
 (equal in the packed bands) or Rayleigh. SVM: Map Range and Vector Math nodes into a Volume Coefficients
-node. OSL: a script node compiled by Blender (`cycles.osl`; needs CPU and Open Shading Language on).
+node, which also takes blackbody emission (σ_t − σ_s) · intensity · Planck_k(T), Planck's band means
+tabulated over the temperature grid's range (the OSL shader has no emission). OSL: a script node compiled by Blender (`cycles.osl`; needs CPU and Open Shading Language on).
 """
 
 from pathlib import Path
@@ -16,6 +17,20 @@ import numpy as np
 from ..tracer.errors import SpectralError
 from .parameters import MediumBands
 
+def _load_osl_query() -> None:
+    """Blender's OSL query module returns Blender's own OpenImageIO types; where another OpenImageIO is
+    installed (pip's, which colour-science imports), whichever loads first owns them, so load Blender's
+    as soon as the add-on does. In Blender-as-a-module it is importable after `expose_bundled_modules`."""
+    expose = getattr(bpy.utils, "expose_bundled_modules", None)
+    if expose is not None:
+        expose()
+    try:
+        import oslquery  # noqa: F401
+    except ImportError:
+        pass  # reported when an OSL shader is compiled
+
+
+_load_osl_query()
 SHADERS = ("SVM", "OSL")
 OSL_SOURCE = Path(__file__).resolve().parents[2] / "osl" / "spectral_volume.osl"
 OSL_LEVELS = 8  # density levels the OSL shader takes (Density0…7, Albedo0…7)
@@ -52,26 +67,43 @@ def _vector_math(tree, operation: str, *inputs):
     return node.outputs["Vector"]
 
 
-def _svm_albedo(tree, density, medium: MediumBands, members):
-    levels, albedo = medium.albedo_densities, medium.albedo
-    result = channels(albedo[0], members)
-    for i in range(len(levels) - 1):
+def _svm_table(tree, x, xs, rows, members):
+    """Rows (N, K) tabulated at increasing xs, linear in x between them and clamped outside, as a vector."""
+    result = channels(rows[0], members)
+    for i in range(len(xs) - 1):
         ramp = tree.nodes.new("ShaderNodeMapRange")
         ramp.clamp = True
-        tree.links.new(density, ramp.inputs["Value"])
-        ramp.inputs["From Min"].default_value, ramp.inputs["From Max"].default_value = levels[i], levels[i + 1]
-        step = channels(albedo[i + 1] - albedo[i], members)
+        tree.links.new(x, ramp.inputs["Value"])
+        ramp.inputs["From Min"].default_value, ramp.inputs["From Max"].default_value = xs[i], xs[i + 1]
+        step = channels(rows[i + 1] - rows[i], members)
         result = _vector_math(tree, "MULTIPLY_ADD", step, ramp.outputs["Result"], result)
     return result
 
 
-def _svm(tree, density, medium: MediumBands, members, g: float):
+def _svm_thermal(tree, plain_absorption, thermal, temperature_attribute: str, members):
+    """σ_a · intensity · Planck(T) per band, T from the temperature grid."""
+    grid = tree.nodes.new("ShaderNodeAttribute")
+    grid.attribute_name = temperature_attribute
+    kelvin = tree.nodes.new("ShaderNodeMath")
+    kelvin.operation = "MULTIPLY_ADD"
+    tree.links.new(grid.outputs["Fac"], kelvin.inputs[0])
+    kelvin.inputs[1].default_value, kelvin.inputs[2].default_value = thermal.scale, thermal.offset
+    radiance = _svm_table(tree, kelvin.outputs["Value"], thermal.temperatures, thermal.radiance, members)
+    return _vector_math(tree, "SCALE", _vector_math(tree, "MULTIPLY", plain_absorption, radiance), thermal.intensity)
+
+
+def _svm(tree, density, medium: MediumBands, members, g: float, temperature_attribute: str | None):
     scale = medium.density_scale
     sigma_t = _vector_math(tree, "SCALE", channels(medium.extinction * scale, members), density)
-    scattering = _vector_math(tree, "MULTIPLY", sigma_t, _svm_albedo(tree, density, medium, members))
+    albedo = _svm_table(tree, density, medium.albedo_densities, medium.albedo, members)
+    scattering = _vector_math(tree, "MULTIPLY", sigma_t, albedo)
+    plain_absorption = _vector_math(tree, "SUBTRACT", sigma_t, scattering)
     absorption = _vector_math(tree, "MULTIPLY_ADD", channels(medium.excitation * scale, members), density,
-                              _vector_math(tree, "SUBTRACT", sigma_t, scattering))
+                              plain_absorption)
     node = tree.nodes.new("ShaderNodeVolumeCoefficients")
+    if medium.thermal is not None:
+        tree.links.new(_svm_thermal(tree, plain_absorption, medium.thermal, temperature_attribute, members),
+                       node.inputs["Emission Coefficients"])
     if medium.phase == "rayleigh":
         node.phase = "RAYLEIGH"  # no Anisotropy input then
     else:
@@ -90,7 +122,6 @@ def osl_text(borrowed):
 
 
 def _compile(node, text) -> None:
-    bpy.utils.expose_bundled_modules()  # Blender-as-a-module: makes the OSL query module importable
     from cycles import osl
 
     messages = []
@@ -99,7 +130,10 @@ def _compile(node, text) -> None:
         raise SpectralError(f"the OSL shader {OSL_SOURCE.name} did not compile: {'; '.join(messages)}")
 
 
-def _osl(tree, density, medium: MediumBands, members, g: float, text):
+def _osl(tree, density, medium: MediumBands, members, g: float, _temperature_attribute, text):
+    if medium.thermal is not None:
+        raise SpectralError(f"material of {medium.name!r} glows by temperature: the OSL shader has no blackbody "
+                            "emission, use the Nodes (SVM) shader")
     if len(medium.albedo_densities) > OSL_LEVELS:
         raise SpectralError(f"material of {medium.name!r} has {len(medium.albedo_densities)} albedo levels; the OSL "
                             f"shader takes at most {OSL_LEVELS}: use the Nodes (SVM) shader")
@@ -117,9 +151,11 @@ def _osl(tree, density, medium: MediumBands, members, g: float, text):
     return node.outputs["Volume"]
 
 
-def volume_material(borrowed, medium: MediumBands, members, attribute: str | None, shader: str = "SVM", text=None):
+def volume_material(borrowed, medium: MediumBands, members, attribute: str | None, shader: str = "SVM", text=None,
+                    temperature: str | None = None):
     """A temporary material holding `medium` in the bands `members` (R, G, B); `attribute` names the density
-    grid (None: density 1, for meshes). OSL needs `text` from `osl_text`."""
+    grid (None: density 1, for meshes), `temperature` the temperature grid of a glowing medium. OSL needs
+    `text` from `osl_text`."""
     if shader not in SHADERS:
         raise SpectralError(f"unknown emulation shader {shader!r}; choose one of {', '.join(SHADERS)}")
     material = borrowed.keep(bpy.data.materials.new(f".spectral emulation {medium.name}"))
@@ -129,5 +165,5 @@ def volume_material(borrowed, medium: MediumBands, members, attribute: str | Non
     density = _density(tree.nodes, attribute)
     g = float(np.mean([medium.anisotropy[band] for band in members]))
     build = _svm if shader == "SVM" else lambda *args: _osl(*args, text)
-    tree.links.new(build(tree, density, medium, members, g), output.inputs["Volume"])
+    tree.links.new(build(tree, density, medium, members, g, temperature), output.inputs["Volume"])
     return material

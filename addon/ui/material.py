@@ -49,7 +49,7 @@ def draw_blackbody(layout, material, renderer: str = "TRACER") -> None:
     settings = material.spectral
     layout.active = settings.use_blackbody
     if renderer == "CYCLES":
-        layout.label(text="Cycles emulation: renders without this emission", icon="ERROR")
+        layout.label(text="Cycles emulation: Nodes shader only (not OSL)", icon="INFO")
     layout.prop(settings, "temperature_grid")
     layout.prop(settings, "blackbody_intensity")
     row = layout.row(align=True)

@@ -23,15 +23,20 @@ BLOCK = 8
 NOISE_BOUND = 4.0  # standard deviations per block
 
 
-def write_blob(path, cells=16, edge=2.0):
-    """A smooth ball of density 1 − r² (0 at its edge, so the grid's border does not matter)."""
+def write_blob(path, cells=16, edge=2.0, hot=False):
+    """A smooth ball of density 1 − r² (0 at its edge, so the grid's border does not matter); `hot` adds a
+    grid "temperature" of 1000 K + 1200 K × density."""
     x = (np.arange(cells) - (cells - 1) / 2) / (cells / 2)
     xx, yy, zz = np.meshgrid(x, x, x, indexing="ij")
     values = np.clip(1.0 - (xx**2 + yy**2 + zz**2), 0.0, None).astype(np.float32)
     voxel = edge / cells
     matrix = np.diag([voxel, voxel, voxel, 1.0])
     matrix[:3, 3] = -edge / 2 + voxel / 2
-    grids.save_grid_vdb(path, Grid(values, matrix, "density"))
+    layers = [Grid(values, matrix, "density")]
+    if hot:
+        layers.append(Grid(np.where(values > 0, 1000.0 + 1200.0 * values, 0.0).astype(np.float32), matrix,
+                           "temperature"))
+    grids.save_grid_vdb(path, *layers)
     return path
 
 
@@ -119,6 +124,17 @@ def test_camera_inside_the_volume_agrees_with_the_tracer(registered, tmp_path):
     scene.camera.location = (0.0, -0.3, 0.0)
     job = _cross_check(scene, bands=3, tracer_spp=256, cycles_spp=64)
     assert job.cycles_renders == 1 and scene.camera.data.clip_start == pytest.approx(0.1)
+
+
+@pytest.mark.slow
+def test_blackbody_emission_agrees_with_the_tracer(registered, tmp_path):
+    scene, cloud = blob_scene(tmp_path)
+    bpy.data.objects.remove(bpy.data.objects["Sun"])  # lit by its own glow only
+    cloud.data.filepath = str(write_blob(tmp_path / "hot.vdb", hot=True))
+    settings = cloud.material_slots[0].material.spectral
+    settings.use_blackbody, settings.blackbody_intensity, settings.albedo.value = True, 0.05, 0.5
+    job = _cross_check(scene, bands=9, tracer_spp=256, cycles_spp=64)
+    assert job.cycles_renders == 3 and job.film.xyz[..., 0].max() > 1.2 * job.film.xyz[..., 2].max()  # warm
 
 
 def _surface_scene(tmp_path):
