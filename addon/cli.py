@@ -21,7 +21,8 @@ _handle = None
 
 
 def _parser(prog: str) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog=prog, description="Render a .blend file with the spectral volume tracer")
+    parser = argparse.ArgumentParser(prog=prog, description="Render a .blend file with the spectral volume tracer "
+                                     "(or its Cycles emulation, when the scene's Render settings choose it)")
     parser.add_argument("blend", type=Path, help=".blend file to render")
     parser.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (XYZ, RGB, variance)")
     parser.add_argument("--scene", help="scene of the file to render (default: the file's active scene)")
@@ -69,14 +70,33 @@ def render_blend(args) -> str:
         raise SpectralError(f"--spp must be at least 1, got {args.spp}")
     scene = open_scene(args.blend, args.scene)
     export = export_context_scene(args.frame)
-    for warning in export.warnings:
+    settings = scene.spectral
+    if settings.renderer == "CYCLES":
+        result, warnings, how = _emulate(scene, export, args.spp)
+    else:
+        warnings, how = export.warnings, "tracer"
+        scheduler = settings.scheduler_address if args.scheduler is None else args.scheduler
+        result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=None if args.quiet else ProgressBar())
+    for warning in warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    scheduler = scene.spectral.scheduler_address if args.scheduler is None else args.scheduler
-    result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=None if args.quiet else ProgressBar())
     film = result.film
     image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
+    spp = settings.samples if args.spp is None else args.spp
     return (f"wrote {args.out} ({film.width}×{film.height}, frame {scene.frame_current}, "
-            f"{result.stats['samples_per_pixel']} spp, {result.seconds:.1f} s)")
+            f"{spp} spp, {how}, {result.seconds:.1f} s)")
+
+
+def _emulate(scene, export, spp):
+    """The Cycles emulation of the scene: (result, warnings, description)."""
+    from .cycles_emulation.job import EmulationJob
+
+    settings = scene.spectral
+    job = EmulationJob(scene, export.scene, export.warnings, band_count=settings.emulation_bands,
+                       shader=settings.emulation_shader, spp=spp)
+    result = job.run()
+    if job.error is not None:
+        raise SpectralError(job.error)
+    return result, job.warnings, f"Cycles emulation, {job.cycles_renders} × 2 Cycles renders"
 
 
 def main(argv=None, prog="python -m addon.cli render") -> int:

@@ -5,7 +5,8 @@ settings' scheduler address, in passes of doubling sample counts;
 after every pass the Render Result is updated (Combined as linear Rec.709, plus the XYZ and
 XYZ Variance passes, which the compositor and multilayer EXR output see), progress is reported and
 Esc (`test_break`) stops the render between passes. Bad input is reported as an error and renders
-nothing, so Blender writes no output file.
+nothing, so Blender writes no output file. With the Cycles emulation chosen as renderer, F12 reports an error
+instead: Cycles cannot render from inside another engine's render (Blender crashes).
 
 While it is the engine, Blender's generic panels (those offered for every engine: camera, volume file
 and grids, output, fluid physics, ...) stay visible, and the viewport's Material Preview uses EEVEE.
@@ -35,6 +36,10 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
         self.register_pass(scene, renderlayer, VARIANCE_PASS, 3, "XYZ", "COLOR")
 
     def render(self, depsgraph):
+        if depsgraph.scene.original.spectral.renderer == "CYCLES":
+            self.report({"ERROR"}, "the Cycles emulation cannot run inside a render engine's render: use Render to "
+                        "Image (Spectral sidebar tab) or the command line, or choose the Tracer renderer")
+            return
         try:
             export = export_scene(depsgraph)
         except SpectralError as problem:

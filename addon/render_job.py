@@ -23,6 +23,9 @@ class RenderJob:
     def start(self) -> None:
         self._thread.start()
 
+    def step(self) -> None:
+        """Nothing to do on the main thread: the render runs on its own (the Cycles emulation's job steps)."""
+
     def run(self) -> None:
         """Render in the calling thread (what the background thread runs)."""
         try:

@@ -1,13 +1,15 @@
 """The "Render to Image" operator: renders the scene into a float Image (and optionally a multilayer
 EXR) without the Render window.
 
-Run from the UI (invoke) it renders on a background thread, shows progress and stops on Esc; run
-from a script (execute) it renders in place. Only a finished render writes anything: a cancelled or
+Run from the UI (invoke) it renders on a background thread (the Cycles emulation: one Cycles render per
+timer tick on the main thread), shows progress and stops on Esc; run from a script (execute) it renders
+in place. Only a finished render writes anything: a cancelled or
 failed one leaves the image and the file as they were.
 """
 
 import bpy
 
+from ..cycles_emulation.job import EmulationJob
 from ..export.scene import export_scene
 from ..image_output import write_outputs
 from ..render_job import RenderJob
@@ -30,15 +32,19 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     _job = None
     _timer = None
 
-    def _start(self, context) -> RenderJob | None:
+    def _start(self, context) -> RenderJob | EmulationJob | None:
+        settings = context.scene.spectral
         try:
             export = export_scene(context.evaluated_depsgraph_get())
+            job = (EmulationJob(context.scene, export.scene, export.warnings, band_count=settings.emulation_bands,
+                                shader=settings.emulation_shader) if settings.renderer == "CYCLES"
+                   else RenderJob(export.scene, settings.scheduler_address))
         except SpectralError as problem:
             self.report({"ERROR"}, f"Nothing rendered: {problem}")
             return None
-        for warning in export.warnings:
+        for warning in getattr(job, "warnings", export.warnings):
             self.report({"WARNING"}, warning)
-        return RenderJob(export.scene, context.scene.spectral.scheduler_address)
+        return job
 
     def _finish(self, job: RenderJob) -> set:
         if job.error is not None:
@@ -79,6 +85,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             self._job.cancel()
         elif event.type != "TIMER":
             return {"PASS_THROUGH"}
+        self._job.step()
         context.window_manager.progress_update(self._job.fraction)
         if self._job.running:
             return {"RUNNING_MODAL"}

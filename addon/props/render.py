@@ -41,6 +41,18 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
     backend: bpy.props.EnumProperty(name="Backend", default=DEFAULTS.backend, items=[
         ("numba", "Numba", "Compiled kernel (fast)"),
         ("numpy", "NumPy", "Reference kernel without a compiler")])
+    renderer: bpy.props.EnumProperty(name="Renderer", default="TRACER", items=[
+        ("TRACER", "Tracer", "The spectral path tracer"),
+        ("CYCLES", "Cycles Emulation", "Cycles, once per group of three wavelength bands, composited into XYZ "
+         "(surfaces, area lights and Cycles features; no fluorescent re-emission). Render to Image or the "
+         "command line, not F12")])
+    emulation_bands: bpy.props.IntProperty(
+        name="Bands", default=12, min=1, soft_max=48,
+        description="Wavelength bands of the Cycles emulation: one Cycles render per three bands (per band "
+                    "where the anisotropy changes with wavelength)")
+    emulation_shader: bpy.props.EnumProperty(name="Shader", default="SVM", items=[
+        ("SVM", "Nodes", "Plain Cycles nodes (faster)"),
+        ("OSL", "OSL", "The Open Shading Language shader osl/spectral_volume.osl (CPU)")])
     scheduler_address: bpy.props.StringProperty(
         name="Scheduler", description="Dask scheduler to render on (tcp://host:port); empty: this computer")
 

@@ -35,17 +35,21 @@ def draw_albedo_levels(layout, material) -> None:
         draw_spectrum(layout, level.spectrum, "Albedo at this density")
 
 
-def draw_fluorescence(layout, material) -> None:
+def draw_fluorescence(layout, material, renderer: str = "TRACER") -> None:
     settings = material.spectral
     layout.active = settings.use_fluorescence
+    if renderer == "CYCLES":
+        layout.label(text="Cycles emulation: excitation absorbs, nothing is re-emitted", icon="ERROR")
     draw_spectrum(layout, settings.excitation, "Excitation")
     draw_spectrum(layout, settings.emission, "Emission")
     layout.prop(settings, "quantum_yield")
 
 
-def draw_blackbody(layout, material) -> None:
+def draw_blackbody(layout, material, renderer: str = "TRACER") -> None:
     settings = material.spectral
     layout.active = settings.use_blackbody
+    if renderer == "CYCLES":
+        layout.label(text="Cycles emulation: Nodes shader only (not OSL)", icon="INFO")
     layout.prop(settings, "temperature_grid")
     layout.prop(settings, "blackbody_intensity")
     row = layout.row(align=True)
@@ -98,7 +102,7 @@ class SPECTRAL_PT_material_fluorescence(MaterialPanel, bpy.types.Panel):
         self.layout.prop(context.material.spectral, "use_fluorescence", text="")
 
     def draw(self, context):
-        draw_fluorescence(self.layout, context.material)
+        draw_fluorescence(self.layout, context.material, context.scene.spectral.renderer)
 
 
 class SPECTRAL_PT_material_blackbody(MaterialPanel, bpy.types.Panel):
@@ -111,7 +115,7 @@ class SPECTRAL_PT_material_blackbody(MaterialPanel, bpy.types.Panel):
         self.layout.prop(context.material.spectral, "use_blackbody", text="")
 
     def draw(self, context):
-        draw_blackbody(self.layout, context.material)
+        draw_blackbody(self.layout, context.material, context.scene.spectral.renderer)
 
 
 CLASSES = (SPECTRAL_UL_albedo_levels, SPECTRAL_PT_material, SPECTRAL_PT_material_albedo,

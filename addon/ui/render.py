@@ -8,9 +8,21 @@ from ..props.render import ENGINE_ID
 
 def draw_render_main(layout, scene) -> None:
     settings = scene.spectral
+    layout.prop(settings, "renderer")
     layout.prop(settings, "samples")
     layout.prop(settings, "max_bounces")
     layout.prop(settings, "seed")
+    if settings.renderer == "CYCLES":
+        draw_emulation(layout.box(), scene)
+
+
+def draw_emulation(layout, scene) -> None:
+    settings = scene.spectral
+    layout.prop(settings, "emulation_bands")
+    layout.prop(settings, "emulation_shader")
+    layout.label(text="Render to Image or the command line (F12 renders nothing)", icon="INFO")
+    layout.label(text="Fluorescence: absorption only, no re-emission", icon="ERROR")
+    layout.label(text="Surfaces: RGB colours upsampled; textures grey", icon="INFO")
 
 
 def draw_wavelengths(layout, scene) -> None:

@@ -24,6 +24,7 @@ class SPECTRAL_PT_sidebar(SidebarPanel, bpy.types.Panel):
             layout.prop(scene.render, "engine")
         layout.operator("spectral.render_image", text="Render", icon="RENDER_STILL")
         layout.operator("spectral.export_scene", text="Export Scene", icon="EXPORT")
+        layout.prop(scene.spectral, "renderer")
         layout.prop(scene.spectral, "samples")
         layout.prop(scene.spectral, "wavelength_sampling")
 

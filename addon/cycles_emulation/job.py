@@ -1,0 +1,125 @@
+"""The emulation driver: one Cycles render after another, each set up on the user's scene and undone, their
+R, G, B composited into an XYZ film.
+
+Each planned render (up to three bands, `parameters.plan`) is made twice, with seeds 2·seed and 2·seed + 1
+and half the samples each, so the film has a variance estimate (`composite`); Cycles keeps its scene
+between the two (persistent data), so the second costs no scene preparation (Cycles 5 spends seconds
+building the octree of a volume whose density comes through shader nodes). `step()` makes one planned
+render and can be called from a modal operator between UI events (Cycles runs on Blender's main thread;
+it cannot run inside another render engine's render); `run()` makes them all. Between steps the scene is
+the user's own, and every step restores it even when Cycles fails.
+"""
+
+import tempfile
+import time
+from pathlib import Path
+
+import bpy
+import numpy as np
+
+from ..tracer import image_io
+from ..tracer.errors import SpectralError
+from ..tracer.render import RenderResult
+from ..tracer.scene import Scene
+from . import setup
+from .composite import CompositeFilm
+from .parameters import plan as make_plan
+from .state import Borrowed
+
+
+class EmulationJob:
+    def __init__(self, scene, tracer_scene: Scene, warnings=(), *, band_count: int, shader: str = "SVM",
+                 spp: int | None = None):
+        self.scene = scene
+        self.plan = make_plan(tracer_scene, band_count)
+        self.shader = shader
+        settings = tracer_scene.settings
+        self.samples = max(1, (settings.spp if spp is None else int(spp)) // 2)
+        self.seed, self.max_bounces = settings.seed, settings.max_depth
+        self.warnings = list(warnings) + list(self.plan.warnings)
+        self.film = CompositeFilm(tracer_scene.camera.width, tracer_scene.camera.height)
+        self._queue = list(self.plan.renders)
+        self._total = len(self._queue)
+        self._cancel = False
+        self._seconds = 0.0
+        self.error = None
+        self.result = None
+
+    @property
+    def cycles_renders(self) -> int:
+        """Planned Cycles renders (band groups), each made twice (two seeds)."""
+        return len(self.plan.renders)
+
+    @property
+    def fraction(self) -> float:
+        return 1.0 - len(self._queue) / self._total
+
+    @property
+    def running(self) -> bool:
+        return self.result is None and self.error is None
+
+    @property
+    def succeeded(self) -> bool:
+        return self.error is None and self.result is not None and not self.result.cancelled
+
+    def cancel(self) -> None:
+        self._cancel = True
+
+    def start(self) -> None:
+        """Nothing to start: `step()` does the work on the main thread (what a modal operator calls)."""
+
+    def step(self) -> None:
+        """Make the next Cycles render, or finish (cancelled, failed or done)."""
+        if not self.running:
+            return
+        if self._cancel or not self._queue:
+            self.result = RenderResult(film=self.film, cancelled=bool(self._queue), seconds=self._seconds)
+            return
+        start = time.perf_counter()
+        members = self._queue.pop(0)
+        try:
+            first, second = self._render(members)
+        except SpectralError as problem:
+            self.error = str(problem)
+            return
+        finally:
+            self._seconds += time.perf_counter() - start
+        self.film.add(first, second, self.plan.weights[list(members)])
+
+    def run(self, cancel=None) -> RenderResult | None:
+        """All renders in this thread; `cancel()` is asked between them."""
+        while self.running:
+            if cancel is not None and cancel():
+                self.cancel()
+            self.step()
+        return self.result
+
+    def _render(self, members) -> tuple[np.ndarray, np.ndarray]:
+        """The two halves of one planned render, (height, width, 3) each, top row first."""
+        scene = self.scene
+        with tempfile.TemporaryDirectory(prefix="spectral_emulation_") as folder, Borrowed() as borrowed:
+            setup.cycles_settings(borrowed, scene, samples=self.samples, max_bounces=self.max_bounces,
+                                  shader=self.shader)
+            setup.camera(borrowed, scene)
+            objects = list(scene.objects)
+            setup.lights(borrowed, objects, self.plan, members)
+            setup.world(borrowed, scene, self.plan, members)
+            setup.materials(borrowed, objects, self.plan, members, self.shader, self.warnings)
+            return tuple(self._cycles(borrowed, members, 2 * self.seed + half, Path(folder) / f"half{half}.exr")
+                         for half in (0, 1))
+
+    def _cycles(self, borrowed, members, seed: int, path: Path) -> np.ndarray:
+        scene = self.scene
+        borrowed.set(scene.cycles, "seed", seed)
+        borrowed.set(scene.render, "filepath", str(path))
+        try:
+            bpy.ops.render.render(write_still=True, scene=scene.name)
+        except RuntimeError as problem:
+            raise SpectralError(f"Cycles failed on bands {self._bands(members)}: {problem}") from None
+        if not path.is_file():
+            raise SpectralError(f"Cycles wrote no image for bands {self._bands(members)}")
+        channels = image_io.read_exr(path)
+        return np.stack([channels[name] for name in "RGB"], axis=-1).astype(np.float64)
+
+    def _bands(self, members) -> str:
+        return ", ".join(self.plan.bands.label(k) for k in members)

@@ -1,0 +1,45 @@
+"""Surface materials in the emulation: a temporary copy of each RGB material whose colours are upsampled to
+spectra (`parameters.reflectance_bands`, or `emitter_bands` for emission colours) and given as their band
+means in the render's R, G and B. Colours that other nodes compute (textures, ramps) cannot be upsampled
+per pixel: they are rendered grey (their luminance, through an RGB to BW node) with a warning.
+"""
+
+from . import parameters
+from .shaders import channels
+
+EMISSIVE_SOCKETS = ("Emission Color",)
+TEXTURED_WARNING = ("material {name!r}: colours computed by nodes (textures, ramps) are not spectral in the "
+                    "Cycles emulation and render grey")
+
+
+def _is_emissive(node, socket) -> bool:
+    return node.type in ("EMISSION", "BACKGROUND") or socket.name in EMISSIVE_SOCKETS
+
+
+def band_material(borrowed, material, members, bands, cmf: str, warnings: list):
+    """A temporary copy of `material` with its colours in the bands `members`."""
+    copy = borrowed.keep(material.copy())
+    tree = copy.node_tree
+    if tree is None:
+        return copy
+    for node in list(tree.nodes):
+        for socket in node.inputs:
+            if socket.type != "RGBA" or not socket.enabled:
+                continue
+            if socket.is_linked:
+                _grey(tree, socket)
+                message = TEXTURED_WARNING.format(name=material.name)
+                if message not in warnings:
+                    warnings.append(message)
+                continue
+            upsample = parameters.emitter_bands if _is_emissive(node, socket) else parameters.reflectance_bands
+            colour = socket.default_value
+            socket.default_value = (*channels(upsample(colour[:3], bands, cmf), members), colour[3])
+    return copy
+
+
+def _grey(tree, socket) -> None:
+    link = socket.links[0]
+    grey = tree.nodes.new("ShaderNodeRGBToBW")
+    tree.links.new(link.from_socket, grey.inputs["Color"])
+    tree.links.new(grey.outputs["Val"], socket)
