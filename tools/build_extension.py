@@ -51,6 +51,12 @@ def wheel_platforms(filename: str) -> tuple[str, ...]:
     raise SystemExit(f"error: cannot tell which platform wheel {filename!r} is for")
 
 
+def serves(filename: str, platforms: list[str]) -> bool:
+    """Whether a wheel belongs in a build for `platforms` (pure-Python wheels belong in every build)."""
+    targets = wheel_platforms(filename)
+    return not targets or not set(targets).isdisjoint(platforms)
+
+
 def download_wheel(filename: str, dest: Path) -> None:
     """Download exactly `filename` from the package index into `dest`."""
     name, version, python_tag, _abi, platform_tag = filename[: -len(".whl")].split("-")
@@ -85,8 +91,7 @@ def build(platforms: list[str], out_dir: Path) -> list[Path]:
     unknown = set(platforms) - set(manifest["platforms"])
     if unknown:
         raise SystemExit(f"error: platform(s) {sorted(unknown)} not in the manifest's {manifest['platforms']}")
-    wheels = [w for w in manifest["wheels"]
-              if not wheel_platforms(Path(w).name) or set(wheel_platforms(Path(w).name)) & set(platforms)]
+    wheels = [w for w in manifest["wheels"] if serves(Path(w).name, platforms)]
 
     wheel_dir = ROOT / "wheels"
     wheel_dir.mkdir(exist_ok=True)
