@@ -6,7 +6,11 @@ mesh as the tracer voxelises it): σ_t = ρ · s · ext_k, albedo_k(ρ) linear b
 clamped outside, σ_s = σ_t · albedo, σ_a = σ_t − σ_s + ρ · s · excitation_k; phase Henyey–Greenstein g
 (equal in the packed bands) or Rayleigh. SVM: Map Range and Vector Math nodes into a Volume Coefficients
 node, which also takes blackbody emission (σ_t − σ_s) · intensity · Planck_k(T), Planck's band means
-tabulated over the temperature grid's range (the OSL shader has no emission). OSL: a script node compiled by Blender (`cycles.osl`; needs CPU and Open Shading Language on).
+tabulated over the temperature grid's range (the OSL shader has no emission). OSL: a script node compiled by
+Blender (`cycles.osl`; needs CPU and Open Shading Language on). Cycles' OSL reads volume grids stochastically
+(one voxel, picked by the trilinear weights), so the shader reads the grid a second time for the albedo
+(`AlbedoGrid`, Cycles' name `geom:<grid>`): with two independent picks σ_s is exact wherever the neighbouring
+voxels lie on one linear piece of the albedo table (osl/spectral_volume.osl).
 """
 
 from pathlib import Path
@@ -130,7 +134,7 @@ def _compile(node, text) -> None:
         raise SpectralError(f"the OSL shader {OSL_SOURCE.name} did not compile: {'; '.join(messages)}")
 
 
-def _osl(tree, density, medium: MediumBands, members, g: float, _temperature_attribute, text):
+def _osl(tree, density, medium: MediumBands, members, g: float, _temperature_attribute, text, attribute):
     if medium.thermal is not None:
         raise SpectralError(f"material of {medium.name!r} glows by temperature: the OSL shader has no blackbody "
                             "emission, use the Nodes (SVM) shader")
@@ -142,7 +146,8 @@ def _osl(tree, density, medium: MediumBands, members, g: float, _temperature_att
     tree.links.new(density, node.inputs["Density"])
     values = {"DensityScale": medium.density_scale, "Extinction": (*channels(medium.extinction, members), 1.0),
               "Excitation": (*channels(medium.excitation, members), 1.0), "Anisotropy": g,
-              "Rayleigh": int(medium.phase == "rayleigh"), "LevelCount": len(medium.albedo_densities)}
+              "Rayleigh": int(medium.phase == "rayleigh"), "LevelCount": len(medium.albedo_densities),
+              "AlbedoGrid": f"geom:{attribute}" if attribute else ""}
     for i, level in enumerate(medium.albedo_densities):
         values[f"Density{i}"] = float(level)
         values[f"Albedo{i}"] = (*channels(medium.albedo[i], members), 1.0)
@@ -164,6 +169,6 @@ def volume_material(borrowed, medium: MediumBands, members, attribute: str | Non
     output = tree.nodes.new("ShaderNodeOutputMaterial")
     density = _density(tree.nodes, attribute)
     g = float(np.mean([medium.anisotropy[band] for band in members]))
-    build = _svm if shader == "SVM" else lambda *args: _osl(*args, text)
+    build = _svm if shader == "SVM" else lambda *args: _osl(*args, text, attribute)
     tree.links.new(build(tree, density, medium, members, g, temperature), output.inputs["Volume"])
     return material
