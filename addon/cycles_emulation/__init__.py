@@ -4,5 +4,6 @@ share a render through its R, G and B channels) and the renders composited into 
 Pure modules (no `bpy`): `bands` (band edges, XYZ weights, band means, packing), `parameters` (per-band
 numbers of a tracer Scene), `composite` (renders → XYZ film). Blender modules: `shaders` (volume node
 trees, SVM or OSL), `surfaces` (RGB materials upsampled per band), `setup` (one render's settings, lights,
-World and materials), `state` (temporary changes undone), `job` (the driver).
+World and materials), `fluids` (Volume objects standing in for fluid domains), `state` (temporary changes
+undone), `job` (the driver).
 """

@@ -21,7 +21,7 @@ from ..tracer import image_io
 from ..tracer.errors import SpectralError
 from ..tracer.render import RenderResult
 from ..tracer.scene import Scene
-from . import setup
+from . import fluids, setup
 from .composite import CompositeFilm
 from .parameters import plan as make_plan
 from .state import Borrowed
@@ -32,6 +32,7 @@ class EmulationJob:
                  spp: int | None = None):
         self.scene = scene
         self.plan = make_plan(tracer_scene, band_count)
+        self._media = {medium.name: medium for medium in tracer_scene.media}
         self.shader = shader
         settings = tracer_scene.settings
         self.samples = max(1, (settings.spp if spp is None else int(spp)) // 2)
@@ -104,7 +105,8 @@ class EmulationJob:
             objects = list(scene.objects)
             setup.lights(borrowed, objects, self.plan, members)
             setup.world(borrowed, scene, self.plan, members)
-            setup.materials(borrowed, objects, self.plan, members, self.shader, self.warnings)
+            stand_ins = fluids.stand_ins(borrowed, scene, objects, self._media, Path(folder))
+            setup.materials(borrowed, objects, self.plan, members, self.shader, self.warnings, stand_ins)
             return tuple(self._cycles(borrowed, members, 2 * self.seed + half, Path(folder) / f"half{half}.exr")
                          for half in (0, 1))
 

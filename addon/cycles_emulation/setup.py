@@ -11,9 +11,8 @@ R, G, B (three bands, never mixed: Cycles keeps colour channels apart).
 
 import bpy
 
-from ..export.fluids import ALIASES, fluid_domain
 from ..export.media import spectral_material
-from . import parameters, shaders, surfaces
+from . import fluids, parameters, shaders, surfaces
 from .parameters import Plan
 
 LIGHT_TYPES = ("SUN", "POINT", "SPOT", "AREA")
@@ -57,11 +56,24 @@ def _light_colour(borrowed, light, colour) -> None:
         borrowed.set(light, "energy", light.energy * peak)
 
 
+def _still(borrowed, datablock) -> None:
+    """Animation and drivers would put a light's own colour and strength back when Cycles evaluates the
+    frame: off while it renders (the values at this frame are the datablock's, which the export used)."""
+    animation = datablock.animation_data
+    if animation is None:
+        return
+    borrowed.set(animation, "action_slot", animation.action_slot)  # restored after the action
+    borrowed.set(animation, "action", None)
+    for driver in animation.drivers:
+        borrowed.set(driver, "mute", True)
+
+
 def lights(borrowed, objects, plan: Plan, members) -> None:
     for obj in objects:
         if obj.type != "LIGHT" or obj.data.type not in LIGHT_TYPES:
             continue
         light = obj.data
+        _still(borrowed, light)
         colours = plan.light_colours.get(obj.name)
         if colours is None:  # not spectral (area lights): its RGB colour upsampled
             colours = parameters.emitter_bands(light.color, plan.bands, plan.cmf)
@@ -101,20 +113,22 @@ def _sky(tree, background, zenith, horizon) -> None:
 
 
 def _attribute(obj, grid: str) -> str | None:
-    """The Cycles attribute of a grid of a Volume object or fluid domain (None for meshes)."""
-    if obj.type == "VOLUME":
-        return grid
-    if fluid_domain(obj) is not None:
-        return ALIASES.get(grid, grid)
-    return None
+    """The Cycles attribute of a grid of a Volume object (None for meshes)."""
+    return grid if obj.type == "VOLUME" else None
 
 
-def materials(borrowed, objects, plan: Plan, members, shader: str, warnings: list) -> None:
+def materials(borrowed, objects, plan: Plan, members, shader: str, warnings: list, stand_ins: dict) -> None:
+    """Volume materials in the bands on volumes, meshes and the fluid domains' `stand_ins`
+    (`fluids.stand_ins`); band copies of the RGB surface materials."""
     media = {medium.name: medium for medium in plan.media}
     text = shaders.osl_text(borrowed) if shader == "OSL" and media else None
     copies = {}
     for obj in objects:
         medium = media.get(obj.name)
+        if obj.name in stand_ins:
+            stand_ins[obj.name].data.materials.append(shaders.volume_material(
+                borrowed, medium, members, fluids.DENSITY, shader, text, fluids.TEMPERATURE))
+            continue
         volume = spectral_material(obj) if medium is not None else None
         for slot in getattr(obj, "material_slots", ()):
             material = slot.material

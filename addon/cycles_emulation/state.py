@@ -1,11 +1,11 @@
 """Temporary changes to the user's scene, undone in reverse order, and temporary datablocks, removed.
 
 Every change the emulation makes for one Cycles render goes through `Borrowed.set` (render settings,
-material slots, light colours, the World); `restore()` puts back the old values and deletes what
-`keep` collected, so a finished, cancelled or failed render leaves the scene as it was. A setting that
-another one limits (an image format's colour depths) is recorded before the other changes, with its own
-value (`set(owner, name, getattr(owner, name))`), so it gets that value back after the other.
-"""
+material slots, light colours, the World, fluid domains' render visibility); `restore()` puts back the
+old values and deletes what `keep` collected (materials, a World, a Text, stand-in objects and volumes),
+so a finished, cancelled or failed render leaves the scene as it was. A setting that another one limits
+(an image format's colour depths) is recorded before the other changes, with its own value
+(`set(owner, name, getattr(owner, name))`), so it gets that value back after the other."""
 
 import bpy
 
@@ -33,7 +33,8 @@ class Borrowed:
         while self._temporaries:
             datablock = self._temporaries.pop()
             collection = {bpy.types.Material: bpy.data.materials, bpy.types.World: bpy.data.worlds,
-                          bpy.types.Text: bpy.data.texts}[type(datablock)]
+                          bpy.types.Text: bpy.data.texts, bpy.types.Object: bpy.data.objects,
+                          bpy.types.Volume: bpy.data.volumes}[type(datablock)]
             collection.remove(datablock)
 
     def __enter__(self):

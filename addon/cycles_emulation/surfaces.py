@@ -17,11 +17,15 @@ def _is_emissive(node, socket) -> bool:
 
 
 def band_material(borrowed, material, members, bands, cmf: str, warnings: list):
-    """A temporary copy of `material` with its colours in the bands `members`."""
+    """A temporary copy of `material` with its colours in the bands `members`; without animation, which
+    would put the RGB colours back when Cycles evaluates the frame (the values at this frame are the
+    material's own)."""
     copy = borrowed.keep(material.copy())
+    copy.animation_data_clear()
     tree = copy.node_tree
     if tree is None:
         return copy
+    tree.animation_data_clear()
     for node in list(tree.nodes):
         for socket in node.inputs:
             if socket.type != "RGBA" or not socket.enabled:

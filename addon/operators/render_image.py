@@ -31,6 +31,8 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
 
     _job = None
     _timer = None
+    _warnings = ()
+    _warnings_shown = 0
 
     def _start(self, context) -> RenderJob | EmulationJob | None:
         settings = context.scene.spectral
@@ -42,11 +44,18 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         except SpectralError as problem:
             self.report({"ERROR"}, f"Nothing rendered: {problem}")
             return None
-        for warning in getattr(job, "warnings", export.warnings):
-            self.report({"WARNING"}, warning)
+        self._warnings, self._warnings_shown = getattr(job, "warnings", export.warnings), 0
+        self._report_warnings()
         return job
 
+    def _report_warnings(self) -> None:
+        """The warnings not shown yet: the emulation finds some while it renders (textured surfaces)."""
+        for warning in self._warnings[self._warnings_shown:]:
+            self.report({"WARNING"}, warning)
+        self._warnings_shown = len(self._warnings)
+
     def _finish(self, job: RenderJob) -> set:
+        self._report_warnings()
         if job.error is not None:
             self.report({"ERROR"}, f"Render failed, nothing written: {job.error}")
             return {"CANCELLED"}

@@ -1,10 +1,11 @@
-"""Small Blender scenes for add-on tests: a camera, a sun, VDB files and volume objects."""
+"""Small Blender scenes for add-on tests: a camera, a sun, VDB files, volume objects and fluid domains."""
 
 import math
 
 import bpy
 import numpy as np
 
+from addon.export.fluids import base_resolution
 from addon.tracer import grids
 from addon.tracer.scene import Grid
 
@@ -59,6 +60,34 @@ def add_volume(path, name="Cloud", material=None):
     obj = link(bpy.data.objects.new(name, volume))
     obj.data.materials.append(material or spectral_material())
     return obj
+
+
+def add_fluid_domain(tmp_path, frames=(1,), density=None):
+    """A 4 × 2 × 2 m smoke domain of 16 × 8 × 8 cells whose cache folder is written with OpenVDB (never
+    baked, never evaluated: its modifier is hidden so Mantaflow does not start). Its cache holds `density`
+    (default: uniform random in 0.1…1) × frame, temperature = 2 × density and flame = density / 2."""
+    bpy.ops.mesh.primitive_cube_add(size=2.0, location=(0.0, 0.0, 1.0))
+    domain = bpy.context.active_object
+    domain.name = "Smoke Domain"
+    domain.scale = (2.0, 1.0, 1.0)
+    modifier = domain.modifiers.new("Fluid", "FLUID")
+    modifier.show_viewport = modifier.show_render = False
+    modifier.fluid_type = "DOMAIN"
+    settings = modifier.domain_settings
+    settings.resolution_max = 16
+    settings.cache_type = "ALL"
+    settings.cache_directory = str(tmp_path / "cache")
+    cells = base_resolution((4.0, 2.0, 2.0), 16)
+    assert tuple(cells) == (16, 8, 8)
+    (tmp_path / "cache" / "data").mkdir(parents=True)
+    if density is None:
+        density = np.random.default_rng(1).uniform(0.1, 1.0, tuple(cells)).astype(np.float32)
+    for frame in frames:
+        grids.save_grid_vdb(tmp_path / "cache" / "data" / f"fluid_data_{frame:04d}.vdb",
+                            Grid(density * frame, np.eye(4), "density"),
+                            Grid(density * 2, np.eye(4), "temperature"), Grid(density / 2, np.eye(4), "flame"))
+    domain.data.materials.append(spectral_material("Fire"))
+    return domain, density
 
 
 def tiny_render(scene, width=16, height=12, samples=2):

@@ -6,15 +6,14 @@ import numpy as np
 import pytest
 
 from addon.export import camera as camera_export
-from addon.export.fluids import base_resolution
 from addon.export.lights import point_intensity
 from addon.export.scene import export_scene
 from addon.tracer import grids, spectra
 from addon.tracer.errors import SpectralError
 from addon.tracer.scene import Grid
 from addon.tracer.scene_io import load_scene
-from tests.addon.builders import (PATTERN, add_camera, add_sun, basic_scene, link, spectral_material,
-                                  vdb_index_to_world, write_vdb)
+from tests.addon.builders import (PATTERN, add_camera, add_fluid_domain, add_sun, basic_scene, link,
+                                  spectral_material, vdb_index_to_world, write_vdb)
 
 bpy = pytest.importorskip("bpy")
 
@@ -133,36 +132,10 @@ def test_voxelising_ignores_float32_rounding_of_the_mesh(registered):
     np.testing.assert_allclose(grid.index_to_world[:3, 3], [0.85 - 17 / 32, -17 / 32, 0.5 - 17 / 32], atol=1e-6)
 
 
-def _fake_fluid_domain(tmp_path, frames=(1,)):
-    """A smoke domain whose cache folder is written with OpenVDB (never baked, never evaluated:
-    its modifier is hidden so Mantaflow does not start)."""
-    bpy.ops.mesh.primitive_cube_add(size=2.0, location=(0.0, 0.0, 1.0))
-    domain = bpy.context.active_object
-    domain.name = "Smoke Domain"
-    domain.scale = (2.0, 1.0, 1.0)
-    modifier = domain.modifiers.new("Fluid", "FLUID")
-    modifier.show_viewport = modifier.show_render = False
-    modifier.fluid_type = "DOMAIN"
-    settings = modifier.domain_settings
-    settings.resolution_max = 16
-    settings.cache_type = "ALL"
-    settings.cache_directory = str(tmp_path / "cache")
-    cells = base_resolution((4.0, 2.0, 2.0), 16)
-    assert tuple(cells) == (16, 8, 8)
-    (tmp_path / "cache" / "data").mkdir(parents=True)
-    density = np.random.default_rng(1).uniform(0.1, 1.0, tuple(cells)).astype(np.float32)
-    for frame in frames:
-        grids.save_grid_vdb(tmp_path / "cache" / "data" / f"fluid_data_{frame:04d}.vdb",
-                            Grid(density * frame, np.eye(4), "density"),
-                            Grid(density * 2, np.eye(4), "temperature"), Grid(density / 2, np.eye(4), "flame"))
-    domain.data.materials.append(spectral_material("Fire"))
-    return domain, density
-
-
 def test_fluid_domain_reads_its_openvdb_cache(registered, tmp_path):
     add_camera()
     add_sun()
-    domain, density = _fake_fluid_domain(tmp_path, frames=(1, 2))
+    domain, density = add_fluid_domain(tmp_path, frames=(1, 2))
     material = domain.material_slots[0].material.spectral
     material.use_blackbody = True
     material.temperature_grid = "heat"
@@ -181,7 +154,7 @@ def test_fluid_domain_reads_its_openvdb_cache(registered, tmp_path):
 def test_fluid_domain_without_a_cache_frame_is_reported(registered, tmp_path):
     add_camera()
     add_sun()
-    _fake_fluid_domain(tmp_path)
+    add_fluid_domain(tmp_path)
     bpy.context.scene.frame_set(5)
     with pytest.raises(SpectralError, match=r"'Smoke Domain': no baked cache for frame 5: .*fluid_data_0005.vdb"):
         _export()
