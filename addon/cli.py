@@ -88,11 +88,9 @@ def render_blend(args) -> str:
 
 def _emulate(scene, export, spp):
     """The Cycles emulation of the scene: (result, warnings, description)."""
-    from .cycles_emulation.job import EmulationJob
+    from .cycles_emulation.job import emulation_job
 
-    settings = scene.spectral
-    job = EmulationJob(scene, export.scene, export.warnings, band_count=settings.emulation_bands,
-                       shader=settings.emulation_shader, spp=spp)
+    job = emulation_job(scene, export, spp)
     result = job.run()
     if job.error is not None:
         raise SpectralError(job.error)

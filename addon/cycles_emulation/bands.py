@@ -5,8 +5,9 @@ Band k covers the grid nodes lo_k ≤ λ < hi_k (the last band includes its uppe
 partition the rendered range and their XYZ weights w_k = Σ_band cmf · Δλ / Σ ȳ · Δλ (the tracer's
 quadrature, `colorimetry.xyz_weights`) add up to the XYZ of a constant spectrum of 1: Y = 1 over the
 visible range. Shaped by a reference spectrum (the scene's lights), the weights make that spectrum's XYZ
-exact however wide the bands: the light's colour is not distorted by the band approximation. A spectrum enters a band as its mean weighted by x̄ + ȳ + z̄ (what the eye sees of the
-band), or its plain mean where the band lies outside the colour matching functions.
+exact however wide the bands: the light's colour is not distorted by the band approximation. A spectrum
+enters a band as its mean weighted by x̄ + ȳ + z̄ (what the eye sees of the band), or its plain mean where
+the band lies outside the colour matching functions.
 
 Cycles renders three bands at once in its R, G and B channels, but its phase functions do not vary per
 channel (three Henyey–Greenstein lobes weighted pure R, G and B render grey): bands share a render only

@@ -27,19 +27,26 @@ def _grids(medium: Medium) -> list[Grid]:
     return grids
 
 
-def stand_ins(borrowed, scene, objects, media: dict[str, Medium], folder: Path) -> dict:
-    """Domain name → a temporary Volume object holding its medium's grids, linked to `scene`; the domains
-    are hidden from the render."""
-    result = {}
+def write_grids(objects, media: dict[str, Medium], folder: Path) -> dict[str, Path]:
+    """Domain name → a VDB in `folder` holding its medium's grids, for every fluid domain the tracer renders
+    (written once per emulation, read by every render's stand-in)."""
+    files = {}
     for obj in objects:
         medium = media.get(obj.name)
-        if medium is None or obj.type != "MESH" or fluid_domain(obj) is None:
-            continue
-        path = save_grid_vdb(folder / f"fluid_domain_{len(result)}.vdb", *_grids(medium))
-        volume = borrowed.keep(bpy.data.volumes.new(f".spectral emulation {obj.name}"))
+        if medium is not None and obj.type == "MESH" and fluid_domain(obj) is not None:
+            files[obj.name] = save_grid_vdb(folder / f"fluid_domain_{len(files)}.vdb", *_grids(medium))
+    return files
+
+
+def stand_ins(borrowed, scene, files: dict[str, Path]) -> dict:
+    """Domain name → a temporary Volume object reading its file from `write_grids`, linked to `scene`;
+    the domains are hidden from the render."""
+    result = {}
+    for name, path in files.items():
+        volume = borrowed.keep(bpy.data.volumes.new(f".spectral emulation {name}"))
         volume.filepath = str(path)
         stand_in = borrowed.keep(bpy.data.objects.new(volume.name, volume))
         scene.collection.objects.link(stand_in)
-        borrowed.set(obj, "hide_render", True)
-        result[obj.name] = stand_in
+        borrowed.set(scene.objects[name], "hide_render", True)
+        result[name] = stand_in
     return result

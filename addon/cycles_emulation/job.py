@@ -7,7 +7,8 @@ between the two (persistent data), so the second costs no scene preparation (Cyc
 building the octree of a volume whose density comes through shader nodes). `step()` makes one planned
 render and can be called from a modal operator between UI events (Cycles runs on Blender's main thread;
 it cannot run inside another render engine's render); `run()` makes them all. Between steps the scene is
-the user's own, and every step restores it even when Cycles fails.
+the user's own, and every step restores it even when Cycles fails. Cycles' images and the fluid domains'
+grids (`fluids`, written once) go to a temporary folder, removed when the job ends.
 """
 
 import tempfile
@@ -33,6 +34,8 @@ class EmulationJob:
         self.scene = scene
         self.plan = make_plan(tracer_scene, band_count)
         self._media = {medium.name: medium for medium in tracer_scene.media}
+        self._scratch = tempfile.TemporaryDirectory(prefix="spectral_emulation_")  # removed when the job ends
+        self._fluid_files = None  # written by the first render
         self.shader = shader
         settings = tracer_scene.settings
         self.samples = max(1, (settings.spp if spp is None else int(spp)) // 2)
@@ -75,6 +78,7 @@ class EmulationJob:
             return
         if self._cancel or not self._queue:
             self.result = RenderResult(film=self.film, cancelled=bool(self._queue), seconds=self._seconds)
+            self._scratch.cleanup()
             return
         start = time.perf_counter()
         members = self._queue.pop(0)
@@ -82,6 +86,7 @@ class EmulationJob:
             first, second = self._render(members)
         except SpectralError as problem:
             self.error = str(problem)
+            self._scratch.cleanup()
             return
         finally:
             self._seconds += time.perf_counter() - start
@@ -97,23 +102,26 @@ class EmulationJob:
 
     def _render(self, members) -> tuple[np.ndarray, np.ndarray]:
         """The two halves of one planned render, (height, width, 3) each, top row first."""
-        scene = self.scene
-        with tempfile.TemporaryDirectory(prefix="spectral_emulation_") as folder, Borrowed() as borrowed:
+        scene, folder = self.scene, Path(self._scratch.name)
+        objects = list(scene.objects)
+        if self._fluid_files is None:
+            self._fluid_files = fluids.write_grids(objects, self._media, folder)
+        with Borrowed() as borrowed:
             setup.cycles_settings(borrowed, scene, samples=self.samples, max_bounces=self.max_bounces,
                                   shader=self.shader)
             setup.camera(borrowed, scene)
-            objects = list(scene.objects)
             setup.lights(borrowed, objects, self.plan, members)
             setup.world(borrowed, scene, self.plan, members)
-            stand_ins = fluids.stand_ins(borrowed, scene, objects, self._media, Path(folder))
+            stand_ins = fluids.stand_ins(borrowed, scene, self._fluid_files)
             setup.materials(borrowed, objects, self.plan, members, self.shader, self.warnings, stand_ins)
-            return tuple(self._cycles(borrowed, members, 2 * self.seed + half, Path(folder) / f"half{half}.exr")
+            return tuple(self._cycles(borrowed, members, 2 * self.seed + half, folder / f"half{half}.exr")
                          for half in (0, 1))
 
     def _cycles(self, borrowed, members, seed: int, path: Path) -> np.ndarray:
         scene = self.scene
         borrowed.set(scene.cycles, "seed", seed)
         borrowed.set(scene.render, "filepath", str(path))
+        path.unlink(missing_ok=True)  # the previous render's half: never read it as this one's
         try:
             bpy.ops.render.render(write_still=True, scene=scene.name)
         except RuntimeError as problem:
@@ -125,3 +133,10 @@ class EmulationJob:
 
     def _bands(self, members) -> str:
         return ", ".join(self.plan.bands.label(k) for k in members)
+
+
+def emulation_job(scene, export, spp: int | None = None) -> EmulationJob:
+    """The emulation of `export` (the scene's `export.scene.Export`) with its Render settings (bands, shader)."""
+    settings = scene.spectral
+    return EmulationJob(scene, export.scene, export.warnings, band_count=settings.emulation_bands,
+                        shader=settings.emulation_shader, spp=spp)

@@ -99,12 +99,16 @@ def thermal_bands(emission, bands: bandlib.Bands, cmf: str = "cie1931") -> Therm
                         offset=emission.temperature_offset)
 
 
+def _unit_luminance(light: Light, spectrum=None) -> np.ndarray:
+    """A light's spectrum (or its `spectrum`, e.g. a sky's horizon) on GRID, scaled to luminance 1."""
+    spectrum = spectrum or light.spectrum
+    return spectrum.values * luminance_scale(dataclasses.replace(light, strength=1.0), spectrum)
+
+
 def light_bands(light: Light, bands: bandlib.Bands, cmf: str = "cie1931", spectrum=None) -> np.ndarray:
     """(K,) colour of a light (or of its `spectrum`, e.g. a sky's horizon) for a Cycles strength of
     Blender's own: the spectrum scaled to luminance 1."""
-    unit = dataclasses.replace(light, strength=1.0)
-    spectrum = spectrum or light.spectrum
-    return bandlib.band_means(spectrum.values * luminance_scale(unit, spectrum), bands, cmf)
+    return bandlib.band_means(_unit_luminance(light, spectrum), bands, cmf)
 
 
 def reflectance_bands(rgb, bands: bandlib.Bands, cmf: str = "cie1931", method: str = "jakob2019") -> np.ndarray:
@@ -137,10 +141,9 @@ def reference_spectrum(lights, media=()) -> np.ndarray | None:
             luminance = colorimetry.spectrum_to_xyz(glow)[1]
             total += glow / luminance if luminance > 0 else 0.0
     for light in lights:
-        unit = dataclasses.replace(light, strength=1.0)
-        total += light.strength * light.spectrum.values * luminance_scale(unit)
+        total += light.strength * _unit_luminance(light)
         if light.horizon_spectrum is not None:
-            total += light.strength * light.horizon_spectrum.values * luminance_scale(unit, light.horizon_spectrum)
+            total += light.strength * _unit_luminance(light, light.horizon_spectrum)
     return total if total.any() else None
 
 

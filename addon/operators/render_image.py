@@ -9,7 +9,7 @@ failed one leaves the image and the file as they were.
 
 import bpy
 
-from ..cycles_emulation.job import EmulationJob
+from ..cycles_emulation.job import EmulationJob, emulation_job
 from ..export.scene import export_scene
 from ..image_output import write_outputs
 from ..render_job import RenderJob
@@ -38,8 +38,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         settings = context.scene.spectral
         try:
             export = export_scene(context.evaluated_depsgraph_get())
-            job = (EmulationJob(context.scene, export.scene, export.warnings, band_count=settings.emulation_bands,
-                                shader=settings.emulation_shader) if settings.renderer == "CYCLES"
+            job = (emulation_job(context.scene, export) if settings.renderer == "CYCLES"
                    else RenderJob(export.scene, settings.scheduler_address))
         except SpectralError as problem:
             self.report({"ERROR"}, f"Nothing rendered: {problem}")

@@ -10,7 +10,8 @@ whatever order the tasks complete in, so the film's floating-point sums are form
 The kernel scenes (one per band, sharing their big arrays) travel once to each worker
 (`Client.scatter(..., broadcast=True)`), not with every task, so no shared file system is needed.
 Dask is imported only here and only when a farm is opened: the rest of the tracer never needs it (the
-extension bundles Dask's wheels for Blender, which ships none). See docs/distributed.md for starting schedulers and workers.
+extension bundles Dask's wheels for Blender, which ships none). See docs/distributed.md for starting
+schedulers and workers.
 """
 
 import asyncio
