@@ -18,6 +18,7 @@ tests/demos/test_blends.py compares the exported scenes, not the files.
 """
 
 import argparse
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -177,8 +178,10 @@ def build_fire(out: Path) -> list:
 # ----------------------------------------------------------------------------- writing
 
 
+@functools.cache
 def designed_pair() -> metamers.MetamerPair:
-    """The designed metamers (calibrated on the code-built cubes, which the .blend's cubes equal)."""
+    """The designed metamers (calibrated on the code-built cubes, which the .blend's cubes equal);
+    designed once per process."""
     return metamers.metamer_pair(metamers.calibrate())
 
 

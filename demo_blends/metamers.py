@@ -13,11 +13,19 @@ phase function do not depend on λ, and the transport at one wavelength never se
 2. Design, with colour-science's observer, illuminants, CIELAB and CIEDE2000, in apparent
    reflectance: ρ₁ is a smooth spectrum (Jakob & Hanika 2019 recovery of an RGB colour); ρ₂ has the
    same XYZ under D65 (three equality constraints) and maximises ΔE00 against ρ₁ under A, with a
-   smoothness penalty, within what the cube can show, by SLSQP on knots every 20 nm.
+   smoothness penalty, within [0, DESIGN_CEILING], by SLSQP on knots every 20 nm. This step is
+   deterministic arithmetic: it does not depend on the calibration (whose noise would otherwise move
+   the bound and with it the optimum), only the check that the cube can show the ceiling does.
 3. Invert per wavelength: albedo_i(λ) = ρ⁻¹(ρ_i(λ)).
 
 The render then shows what the design promised only as far as the calibration holds: `metrics`
 measures ΔE00 on the rendered faces.
+
+Reproducibility: the calibration is a seeded Monte Carlo render, so on one machine it gives the same
+G every time, but another CPU (other last bits in OpenBLAS, NumPy's SIMD or the C library) traces some
+paths differently and gets another G within its noise. The albedos therefore reproduce across
+machines only within the calibration's own standard error, which `Calibration.albedo_errors`
+propagates to each wavelength's albedo.
 """
 
 import warnings
@@ -35,6 +43,8 @@ from . import metrics, scenes
 
 CALIBRATION_ALBEDOS = (0.0, 0.5, 0.75, 0.88, 0.94, 0.97, 1.0)
 MAX_ALBEDO = 0.97  # designs stay at or below this albedo (near 1, paths get long and ρ very steep)
+DESIGN_CEILING = 0.75  # highest apparent reflectance designed: ρ(MAX_ALBEDO) is 0.76 in the two-cube scene
+CALIBRATION_SPP = 128
 KNOTS = np.arange(380.0, 721.0, 20.0)
 BASE_RGB = (0.22, 0.3, 0.18)  # ρ₁: a muted olive green under D65
 SMOOTHNESS = 2.0
@@ -43,10 +53,12 @@ DESIGN_STARTS = 6
 
 @dataclass(frozen=True)
 class Calibration:
-    """G(a), the mean front-face Y per unit radiometric light, at the calibration albedos."""
+    """G(a), the mean front-face Y per unit radiometric light, at the calibration albedos, with the
+    standard error of each (zero where it is exact)."""
 
     albedos: np.ndarray
     response: np.ndarray
+    errors: np.ndarray | None = None
 
     def g(self, albedo):
         s = np.sqrt(1.0 - np.asarray(albedo, dtype=np.float64))
@@ -65,6 +77,20 @@ class Calibration:
         """ρ⁻¹: the albedo whose apparent reflectance is `reflectance` (ρ increases with a)."""
         table = np.linspace(0.0, 1.0, 2001)
         return np.interp(reflectance, self.reflectance(table), table)
+
+    def albedo_errors(self, reflectance) -> np.ndarray:
+        """Standard error of `albedo_for(reflectance)` that the calibration's noise causes: the albedo's
+        change when each response moves by its standard error, added in quadrature (first-order
+        propagation; counting the responses' errors as independent overstates it, since they share
+        random numbers and partly cancel in G(a) / G(1))."""
+        errors = np.zeros_like(self.response) if self.errors is None else self.errors
+        albedo = self.albedo_for(reflectance)
+        squares = np.zeros_like(albedo)
+        for k, error in enumerate(errors):
+            if error > 0.0:
+                moved = replace(self, response=self.response + error * (np.arange(self.response.size) == k))
+                squares += (moved.albedo_for(reflectance) - albedo) ** 2
+        return np.sqrt(squares)
 
 
 # ----------------------------------------------------------------------------- 1. calibration
@@ -86,25 +112,27 @@ def face_camera(camera, centre, size: int):
                    shift_x=0.5 * (x0 + x1) / span, shift_y=0.5 * (y0 + y1) / span)
 
 
-def face_response(scene, albedo: float, spp: int = 48, size: int = 24) -> float:
-    """G(albedo): the mean Y of the left cube's front face in the two-cube `scene` when every medium
-    has the constant albedo `albedo` and every light a flat spectrum (strengths kept), seen through
-    `face_camera`."""
+def face_response(scene, albedo: float, spp: int = 48, size: int = 24) -> tuple[float, float]:
+    """G(albedo) and its standard error: the mean Y of the left cube's front face in the two-cube
+    `scene` when every medium has the constant albedo `albedo` and every light a flat spectrum
+    (strengths kept), seen through `face_camera`."""
     flat = spectra.constant(1.0)
     media = tuple(replace(medium, albedo_table=np.full_like(medium.albedo_table, albedo)) for medium in scene.media)
     lights = tuple(replace(light, spectrum=flat) for light in scene.lights)
     camera = face_camera(scene.camera, scenes.CUBE_CENTRES[0], size)
     probe = replace(scene, camera=camera, media=media, lights=lights, settings=replace(scene.settings, spp=spp))
-    xyz = render(probe).film.xyz
-    return float(metrics.region_xyz(xyz, metrics.face_mask(camera, scenes.CUBE_CENTRES[0], scenes.CUBE_EDGE))[1])
+    film = render(probe).film
+    face = metrics.face_mask(camera, scenes.CUBE_CENTRES[0], scenes.CUBE_EDGE)
+    error = np.sqrt(film.variance[face][:, 1].sum()) / face.sum()
+    return float(metrics.region_xyz(film.xyz, face)[1]), float(error)
 
 
-def calibrate(spp: int = 48, size: int = 24) -> Calibration:
+def calibrate(spp: int = CALIBRATION_SPP, size: int = 24) -> Calibration:
     """G at each albedo in CALIBRATION_ALBEDOS, in the code-built two-cube scene (a sun of radiometric
     irradiance 1 and its fill)."""
     scene = scenes.two_cubes(1.0, 1.0, spectra.constant(1.0), 8, 8, spp)
-    responses = [face_response(scene, albedo, spp, size) for albedo in CALIBRATION_ALBEDOS]
-    return Calibration(np.array(CALIBRATION_ALBEDOS), np.array(responses))
+    responses, errors = zip(*(face_response(scene, albedo, spp, size) for albedo in CALIBRATION_ALBEDOS))
+    return Calibration(np.array(CALIBRATION_ALBEDOS), np.array(responses), np.array(errors))
 
 
 # ----------------------------------------------------------------------------- 2. design
@@ -168,10 +196,19 @@ class MetamerPair:
     def predicted_delta_e(self, light: str) -> float:
         return delta_e(*self.reflectances, scenes.LIGHTS[light].values)
 
+    @property
+    def albedo_errors(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each albedo's standard error per wavelength from the calibration's noise: how far the same
+        design can land on another CPU (see the module's docstring)."""
+        return tuple(self.calibration.albedo_errors(r) for r in self.reflectances)
+
 
 def metamer_pair(calibration: Calibration) -> MetamerPair:
-    highest = float(calibration.reflectance(MAX_ALBEDO))
-    reflectances = design_pair(highest)
+    reachable = float(calibration.reflectance(MAX_ALBEDO))
+    if reachable < DESIGN_CEILING:
+        raise ValueError(f"the cube's apparent reflectance reaches only {reachable:.3f} at albedo {MAX_ALBEDO}, "
+                         f"below the design ceiling {DESIGN_CEILING}")
+    reflectances = design_pair(DESIGN_CEILING)
     albedos = tuple(spectra.Spectrum(np.clip(calibration.albedo_for(r), 0.0, 1.0)) for r in reflectances)
     return MetamerPair(calibration, reflectances, albedos)
 

@@ -78,7 +78,7 @@ def _fire_lines(f: dict) -> list[str]:
 
 def _cubes(scene, xyz) -> dict:
     """ΔE00 between the cubes against the white of an albedo-1 cube in this very scene."""
-    white = metamers.face_response(scene, 1.0)
+    white, _ = metamers.face_response(scene, 1.0)
     return metrics.metamerism(scene, xyz, scenes.CUBE_CENTRES, scenes.CUBE_EDGE, white)
 
 

@@ -1,10 +1,13 @@
 """The committed demo .blend files: each scene exports (through the add-on) to the tracer scene that
-`demo_blends.scenes` builds in code, and `build_blends` rebuilds exactly what is committed.
+`demo_blends.scenes` builds in code, and `build_blends` rebuilds what is committed: exactly, except the
+designed metamers' albedos, which rest on a seeded Monte Carlo calibration and so reproduce on another
+CPU only within that calibration's noise (`demo_blends.metamers`).
 
 No rendering here except the metamer design's calibration inside the rebuild (a few seconds)."""
 
 import numpy as np
 import pytest
+from scipy.ndimage import maximum_filter1d
 
 from addon import cli
 from addon.tracer.spectra import Spectrum
@@ -22,6 +25,10 @@ REFERENCES = {
     "metamers_simple_d65": scenes.metamerism_simple("D65"),
     "metamers_simple_lower_half": scenes.metamerism_simple("D65 lower half"),
 }
+# A rebuilt designed albedo may differ from the committed one by this many standard deviations of the
+# difference of two calibrations (√2 × the design's own standard error at each wavelength): a correct
+# rebuild on another CPU exceeds it with probability below 1e-6 per wavelength for normal errors.
+DESIGN_SIGMAS = 5.0
 # Spectra drawn as curves differ from the code's by Blender's curve table (256 steps over 250–830 nm):
 # at most 0.05 next to a kink (the report's anisotropy starts rising at 380 nm with infinite slope).
 CURVE_MAX_ERROR, CURVE_MEAN_ERROR = 0.06, 0.005
@@ -41,14 +48,17 @@ def committed():
     return export_all(build_blends.HERE)
 
 
-def assert_same_spectrum(a, b, lambda_min: float, curve: bool, what: str):
-    """Equal over the rendered range [lambda_min, 830] nm, up to the curve table when `curve`."""
+def assert_same_spectrum(a, b, lambda_min: float, curve: bool, what: str, tolerance=1e-6):
+    """Equal over the rendered range [lambda_min, 830] nm, up to the curve table when `curve`, else
+    within `tolerance` (a number, or one per wavelength of GRID)."""
     rendered = GRID >= lambda_min + (5.0 if curve else 0.0)
     error = np.abs(a.values - b.values)[rendered]
     if curve:
         assert error.max() < CURVE_MAX_ERROR and error.mean() < CURVE_MEAN_ERROR, what
     else:
-        assert error.max() < 1e-6, what
+        excess = error - np.broadcast_to(tolerance, GRID.shape)[rendered]
+        assert excess.max() <= 0.0, f"{what}: {error[excess.argmax()]:.3g} off at " \
+                                    f"{GRID[rendered][excess.argmax()]:.0f} nm, beyond the tolerance"
 
 
 def assert_same_grid(a, b, what: str):
@@ -70,10 +80,11 @@ def light_shape(light, lambda_min: float) -> np.ndarray:
     return values / values.max()
 
 
-def assert_same_scene(exported, reference, curve: bool, renamed=None):
+def assert_same_scene(exported, reference, curve: bool, renamed=None, albedo_tolerances=None):
     """`exported` equals `reference`: camera, settings, lights (spectra as shapes) and media, whose
-    names in `exported` map to `reference`'s through `renamed` (default: the same names)."""
-    renamed = renamed or {}
+    names in `exported` map to `reference`'s through `renamed` (default: the same names); the albedo
+    of a medium named in `albedo_tolerances` within that tolerance (per wavelength)."""
+    renamed, albedo_tolerances = renamed or {}, albedo_tolerances or {}
     cam_a, cam_b = exported.camera, reference.camera
     assert (cam_a.width, cam_a.height, cam_a.kind) == (cam_b.width, cam_b.height, cam_b.kind)
     np.testing.assert_allclose(cam_a.to_world, cam_b.to_world, atol=1e-5)
@@ -97,7 +108,7 @@ def assert_same_scene(exported, reference, curve: bool, renamed=None):
             assert_same_spectrum(getattr(a, field), getattr(b, field), low, curve, f"{a.name} {field}")
         np.testing.assert_array_equal(a.albedo_densities, b.albedo_densities)
         assert_same_spectrum(Spectrum(a.albedo_table[0]), Spectrum(b.albedo_table[0]), low, curve,
-                             f"{a.name} albedo")
+                             f"{a.name} albedo", albedo_tolerances.get(a.name, 1e-6))
         assert (a.fluorescence is None) == (b.fluorescence is None) and (a.emission is None) == (b.emission is None)
         if b.fluorescence is not None:
             fa, fb = a.fluorescence, b.fluorescence
@@ -130,8 +141,14 @@ def test_designed_cubes_stand_where_the_simple_ones_do(committed, name, light):
 
 
 def test_build_script_reproduces_the_committed_files(committed, tmp_path):
-    """Rebuilt from factory settings (the metamers designed afresh), every scene exports the same."""
+    """Rebuilt from factory settings (the metamers designed afresh), every scene exports the same, the
+    designed albedos within DESIGN_SIGMAS of the design's noise."""
     build_blends.build(tmp_path, log=lambda *args: None)
     rebuilt = export_all(tmp_path)
+    errors = build_blends.designed_pair().albedo_errors  # the pair the rebuild designed (cached)
+    # The .blend holds each albedo as a curve, read back through Blender's curve table (a step of 2.3 nm):
+    # a value there mixes the design's values up to 3 nm away, so it takes the largest error among them.
+    tolerances = {f"Designed {side} cube": DESIGN_SIGMAS * np.sqrt(2.0) * maximum_filter1d(error, 7) + 1e-6
+                  for side, error in zip(("left", "right"), errors)}
     for name in build_blends.DEMO_SCENES:
-        assert_same_scene(rebuilt[name], committed[name], curve=False)
+        assert_same_scene(rebuilt[name], committed[name], curve=False, albedo_tolerances=tolerances)
