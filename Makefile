@@ -9,7 +9,7 @@ STAMP     := $(VENV)/.installed
 BOOT_PY   ?= $(shell if PYENV_VERSION=3.13.0 python3.13 --version >/dev/null 2>&1; \
                 then echo "env PYENV_VERSION=3.13.0 python3.13"; else echo python3.13; fi)
 
-.PHONY: setup demo test test-fast extension bench clean
+.PHONY: setup demo test test-fast test-cpus extension bench clean
 
 setup: $(STAMP)
 
@@ -27,6 +27,11 @@ test: setup
 
 test-fast: setup
 	$(PY) -m pytest -q -m "not slow"
+
+# The numerically sensitive tests again as if on other CPUs (Numba, NumPy and OpenBLAS told to use
+# other code paths; tools/cpu_variants.py): CI runs it after `make test`.
+test-cpus: setup
+	$(PY) tools/cpu_variants.py
 
 extension: setup
 	$(PY) tools/build_extension.py --out dist

@@ -1,0 +1,77 @@
+"""Run the numerically sensitive tests as if on other CPUs, so that a test that holds only on the CPU it
+was written on fails here, not on a stranger's machine.
+
+Three libraries pick code by the CPU they run on, and each rounds the last bits its own way:
+- Numba compiles the kernels for the host CPU (`NUMBA_CPU_NAME` overrides it);
+- NumPy dispatches `exp`, `log`, `cbrt`, … to AVX2 / AVX-512 implementations (`NPY_DISABLE_CPU_FEATURES`
+  switches its dispatched targets off);
+- OpenBLAS picks kernels by CPU family (`OPENBLAS_CORETYPE` overrides it).
+A path tracer amplifies such differences: one path that takes another branch changes a pixel. Every
+variant below runs `TEST_PATHS` with all three overridden; a variant whose instructions the host lacks
+is left out, and says so.
+
+    python tools/cpu_variants.py [--only NAME ...] [pytest arguments ...]
+"""
+
+import argparse
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+# The tests whose results come from rendering or from fits to rendered data.
+TEST_PATHS = ("tests/tracer", "tests/demos", "tests/cycles")
+# NumPy's dispatchable x86-64 targets above its baseline (unknown names are ignored by NumPy).
+NUMPY_X86_TARGETS = ("X86_V3", "X86_V4", "AVX512_ICL", "AVX512_SPR")
+
+VARIANTS = {
+    # Any x86-64 CPU: no FMA, no AVX in the kernels, NumPy's and OpenBLAS's baseline code.
+    "generic": ({"NUMBA_CPU_NAME": "generic", "OPENBLAS_CORETYPE": "Prescott",
+                 "NPY_DISABLE_CPU_FEATURES": " ".join(NUMPY_X86_TARGETS)}, ()),
+    # An AVX2 + FMA CPU without AVX-512 (runs only where the host has AVX2 and FMA).
+    "haswell": ({"NUMBA_CPU_NAME": "haswell", "OPENBLAS_CORETYPE": "Haswell",
+                 "NPY_DISABLE_CPU_FEATURES": " ".join(NUMPY_X86_TARGETS[1:])}, ("avx2", "fma")),
+}
+
+
+def host_flags() -> set[str]:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("flags"):
+                return set(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    return set()
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", nargs="+", choices=sorted(VARIANTS), help="run only these variants")
+    args, pytest_args = parser.parse_known_args(argv)
+    if os.uname().machine not in ("x86_64", "AMD64"):
+        print(f"cpu_variants: the variants emulate x86-64 CPUs; nothing to do on {os.uname().machine}")
+        return 0
+    flags, failed = host_flags(), []
+    for name in args.only or VARIANTS:
+        environment, needs = VARIANTS[name]
+        missing = [flag for flag in needs if flag not in flags]
+        if missing:
+            print(f"cpu_variants: {name}: left out, this CPU lacks {', '.join(missing)}")
+            continue
+        print(f"cpu_variants: {name}: {' '.join(f'{k}={v!r}' for k, v in environment.items())}", flush=True)
+        start = time.monotonic()
+        done = subprocess.run([sys.executable, "-m", "pytest", "-q", *TEST_PATHS, *pytest_args], cwd=REPO,
+                              env={**os.environ, **environment})
+        print(f"cpu_variants: {name}: {'passed' if done.returncode == 0 else 'FAILED'} in "
+              f"{time.monotonic() - start:.0f} s", flush=True)
+        if done.returncode != 0:
+            failed.append(name)
+    if failed:
+        print(f"cpu_variants: failed under {', '.join(failed)}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
