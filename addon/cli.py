@@ -94,7 +94,7 @@ def _emulate(scene, export, spp):
     result = job.run()
     if job.error is not None:
         raise SpectralError(job.error)
-    return result, job.warnings, f"Cycles emulation, {job.cycles_renders} × 2 Cycles renders"
+    return result, job.warnings, f"Cycles emulation: {job.describe()}, each made twice"
 
 
 def main(argv=None, prog="python -m addon.cli render") -> int:

@@ -160,19 +160,23 @@ NEAR_SUN_DEGREES = (2.5, 10.0)  # "around the sun": this ring (the disc itself h
 def rayleigh(scene, xyz: np.ndarray) -> dict:
     """Colours of the sky far from the sun, of the ring around it, of the sun's disc as seen through
     the air, and of the light itself (its spectrum), all against the light's own colour as white."""
+    white = light_xyz(sun(scene))
+    figures = {name: describe(region_xyz(xyz, mask), white) for name, mask in sky_regions(scene).items()}
+    figures["light"] = describe(white, white)
+    return figures
+
+
+def sky_regions(scene) -> dict:
+    """Pixel masks of the sky far from the sun, the ring around it and the sun's disc."""
     light = sun(scene)
     angle = angle_from(scene.camera, light.direction)
     height = elevation(scene.camera)
-    white = light_xyz(light)
-    regions = {
+    return {
         "sky away": (angle >= SKY_AWAY[0]) & (height >= SKY_AWAY[1]),
         "around sun": (height > 0.0) & (angle >= NEAR_SUN_DEGREES[0]) & (angle <= NEAR_SUN_DEGREES[1]),
         # the inner part of the disc, or the one pixel nearest its centre in a coarse image
         "sun disc": (angle <= 0.35 * np.degrees(light.angle)) | (angle == angle.min()),
     }
-    figures = {name: describe(region_xyz(xyz, mask), white) for name, mask in regions.items()}
-    figures["light"] = describe(white, white)
-    return figures
 
 
 # ----------------------------------------------------------------------------- metamerism
@@ -265,10 +269,15 @@ def correlated_colour_temperature(xyz: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return cct_duv[..., 0], cct_duv[..., 1]
 
 
+def flame_mask(xyz: np.ndarray) -> np.ndarray:
+    """The image's bright pixels (the flame)."""
+    luminance = xyz[..., 1]
+    return luminance >= BRIGHT * np.percentile(luminance, 99.5)
+
+
 def fire(scene, xyz: np.ndarray) -> dict:
     """Colour temperatures of the image's bright pixels (the flame)."""
-    luminance = xyz[..., 1]
-    bright = luminance >= BRIGHT * np.percentile(luminance, 99.5)
+    bright = flame_mask(xyz)
     cct, duv = correlated_colour_temperature(xyz[bright])
     return {"pixels": int(bright.sum()), "cct_min": float(cct.min()), "cct_max": float(cct.max()),
             "cct_p5": float(np.percentile(cct, 5)), "cct_median": float(np.median(cct)),

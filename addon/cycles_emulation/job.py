@@ -23,16 +23,20 @@ from ..tracer.errors import SpectralError
 from ..tracer.render import RenderResult
 from ..tracer.scene import Scene
 from . import fluids, setup
+from .band_plan import DEFAULT_MAX_RENDERS, plan_bands
 from .composite import CompositeFilm
 from .parameters import plan as make_plan
 from .state import Borrowed
 
 
 class EmulationJob:
-    def __init__(self, scene, tracer_scene: Scene, warnings=(), *, band_count: int, shader: str = "SVM",
-                 spp: int | None = None):
+    """`band_count` equal bands, or (None) the bands `band_plan` chooses within `max_renders` Cycles renders."""
+
+    def __init__(self, scene, tracer_scene: Scene, warnings=(), *, band_count: int | None = None,
+                 max_renders: int = DEFAULT_MAX_RENDERS, shader: str = "SVM", spp: int | None = None):
         self.scene = scene
-        self.plan = make_plan(tracer_scene, band_count)
+        self.band_plan = None if band_count is not None else plan_bands(tracer_scene, max_renders=max_renders)
+        self.plan = make_plan(tracer_scene, band_count if self.band_plan is None else self.band_plan.bands)
         self._media = {medium.name: medium for medium in tracer_scene.media}
         self._scratch = tempfile.TemporaryDirectory(prefix="spectral_emulation_")  # removed when the job ends
         self._fluid_files = None  # written by the first render
@@ -41,6 +45,8 @@ class EmulationJob:
         self.samples = max(1, (settings.spp if spp is None else int(spp)) // 2)
         self.seed, self.max_bounces = settings.seed, settings.max_depth
         self.warnings = list(warnings) + list(self.plan.warnings)
+        if self.band_plan is not None and self.band_plan.warning:
+            self.warnings.append(self.band_plan.warning)
         self.film = CompositeFilm(tracer_scene.camera.width, tracer_scene.camera.height)
         self._queue = list(self.plan.renders)
         self._total = len(self._queue)
@@ -53,6 +59,12 @@ class EmulationJob:
     def cycles_renders(self) -> int:
         """Planned Cycles renders (band groups), each made twice (two seeds)."""
         return len(self.plan.renders)
+
+    def describe(self) -> str:
+        """The bands and what they cost, for the user (with the estimated colour error when planned)."""
+        if self.band_plan is not None:
+            return self.band_plan.summary()
+        return f"{self.plan.bands.count} equal bands in {self.cycles_renders} Cycles render(s)"
 
     @property
     def fraction(self) -> float:
@@ -138,5 +150,6 @@ class EmulationJob:
 def emulation_job(scene, export, spp: int | None = None) -> EmulationJob:
     """The emulation of `export` (the scene's `export.scene.Export`) with its Render settings (bands, shader)."""
     settings = scene.spectral
-    return EmulationJob(scene, export.scene, export.warnings, band_count=settings.emulation_bands,
-                        shader=settings.emulation_shader, spp=spp)
+    band_count = settings.emulation_bands if settings.emulation_band_mode == "FIXED" else None
+    return EmulationJob(scene, export.scene, export.warnings, band_count=band_count,
+                        max_renders=settings.emulation_max_renders, shader=settings.emulation_shader, spp=spp)

@@ -99,7 +99,7 @@ def thermal_bands(emission, bands: bandlib.Bands, cmf: str = "cie1931") -> Therm
                         offset=emission.temperature_offset)
 
 
-def _unit_luminance(light: Light, spectrum=None) -> np.ndarray:
+def unit_luminance(light: Light, spectrum=None) -> np.ndarray:
     """A light's spectrum (or its `spectrum`, e.g. a sky's horizon) on GRID, scaled to luminance 1."""
     spectrum = spectrum or light.spectrum
     return spectrum.values * luminance_scale(dataclasses.replace(light, strength=1.0), spectrum)
@@ -108,7 +108,7 @@ def _unit_luminance(light: Light, spectrum=None) -> np.ndarray:
 def light_bands(light: Light, bands: bandlib.Bands, cmf: str = "cie1931", spectrum=None) -> np.ndarray:
     """(K,) colour of a light (or of its `spectrum`, e.g. a sky's horizon) for a Cycles strength of
     Blender's own: the spectrum scaled to luminance 1."""
-    return bandlib.band_means(_unit_luminance(light, spectrum), bands, cmf)
+    return bandlib.band_means(unit_luminance(light, spectrum), bands, cmf)
 
 
 def reflectance_bands(rgb, bands: bandlib.Bands, cmf: str = "cie1931", method: str = "jakob2019") -> np.ndarray:
@@ -141,19 +141,20 @@ def reference_spectrum(lights, media=()) -> np.ndarray | None:
             luminance = colorimetry.spectrum_to_xyz(glow)[1]
             total += glow / luminance if luminance > 0 else 0.0
     for light in lights:
-        total += light.strength * _unit_luminance(light)
+        total += light.strength * unit_luminance(light)
         if light.horizon_spectrum is not None:
-            total += light.strength * _unit_luminance(light, light.horizon_spectrum)
+            total += light.strength * unit_luminance(light, light.horizon_spectrum)
     return total if total.any() else None
 
 
-def plan(scene: Scene, band_count: int) -> Plan:
-    """The emulation of `scene` with `band_count` bands over the tracer's rendered wavelength range."""
+def plan(scene: Scene, bands: bandlib.Bands | int) -> Plan:
+    """The emulation of `scene` with `bands` (chosen ones, `band_plan.plan_bands`, or a count of equal bands
+    over the tracer's rendered wavelength range)."""
     settings = scene.settings
-    lo, hi = default_band(settings)
-    if band_count < 1:
-        raise SpectralError(f"the Cycles emulation needs at least 1 band, got {band_count}")
-    bands = bandlib.split(lo, hi, band_count)
+    if isinstance(bands, int):
+        if bands < 1:
+            raise SpectralError(f"the Cycles emulation needs at least 1 band, got {bands}")
+        bands = bandlib.split(*default_band(settings), bands)
     media = tuple(medium_bands(medium, bands, settings.cmf) for medium in scene.media)
     warnings = [FLUORESCENCE_WARNING.format(name=m.name) for m in scene.media if m.fluorescence is not None]
     world = next((light for light in scene.lights if light.kind in ("environment", "sky")), None)

@@ -44,6 +44,8 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             self.report({"ERROR"}, f"Nothing rendered: {problem}")
             return None
         self._warnings, self._warnings_shown = getattr(job, "warnings", export.warnings), 0
+        if isinstance(job, EmulationJob):
+            self.report({"INFO"}, f"Cycles emulation: {job.describe()}")
         self._report_warnings()
         return job
 

@@ -2,6 +2,7 @@
 
 import bpy
 
+from ..cycles_emulation.band_plan import DEFAULT_MAX_RENDERS, TARGET_DELTA_E
 from ..tracer.scene import RenderSettings
 from ..tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
 
@@ -46,8 +47,17 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
         ("CYCLES", "Cycles Emulation", "Cycles, once per group of three wavelength bands, composited into XYZ "
          "(surfaces, area lights and Cycles features; no fluorescent re-emission). Render to Image or the "
          "command line, not F12")])
+    emulation_band_mode: bpy.props.EnumProperty(name="Bands", default="AUTO", items=[
+        ("AUTO", "Automatic", "As many bands as the scene's spectra need for an estimated colour error below "
+         f"ΔE00 {TARGET_DELTA_E:g}, narrow where the eye sees them change, within the render budget"),
+        ("FIXED", "Fixed", "A given number of equal bands")],
+        description="How the Cycles emulation splits the wavelength range into bands")
+    emulation_max_renders: bpy.props.IntProperty(
+        name="Max Renders", default=DEFAULT_MAX_RENDERS, min=1, soft_max=32,
+        description="Most Cycles renders (each made twice, with two seeds) the automatic bands may use: "
+                    "three bands per render, one where the anisotropy changes with wavelength")
     emulation_bands: bpy.props.IntProperty(
-        name="Bands", default=12, min=1, soft_max=48,
+        name="Band Count", default=12, min=1, soft_max=48,
         description="Wavelength bands of the Cycles emulation: one Cycles render per three bands (per band "
                     "where the anisotropy changes with wavelength)")
     emulation_shader: bpy.props.EnumProperty(name="Shader", default="SVM", items=[

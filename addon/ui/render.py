@@ -3,6 +3,7 @@
 import bpy
 
 from ..export.fluids import fluid_domain
+from ..operators.emulation import ESTIMATES
 from ..props.render import ENGINE_ID
 
 
@@ -18,7 +19,16 @@ def draw_render_main(layout, scene) -> None:
 
 def draw_emulation(layout, scene) -> None:
     settings = scene.spectral
-    layout.prop(settings, "emulation_bands")
+    layout.prop(settings, "emulation_band_mode")
+    if settings.emulation_band_mode == "AUTO":
+        layout.prop(settings, "emulation_max_renders")
+        row = layout.row()
+        row.operator("spectral.estimate_emulation_bands", icon="COLOR")
+        estimate = ESTIMATES.get(scene.name)
+        if estimate:
+            layout.label(text=estimate, icon="INFO")
+    else:
+        layout.prop(settings, "emulation_bands")
     layout.prop(settings, "emulation_shader")
     layout.label(text="Render to Image or the command line (F12 renders nothing)", icon="INFO")
     layout.label(text="Fluorescence: absorption only, no re-emission", icon="ERROR")

@@ -310,8 +310,7 @@ def test_fluorescence_is_rendered_as_absorption_with_a_warning(registered, tmp_p
 
 def test_render_to_image_uses_the_emulation_when_chosen(registered, tmp_path, capfd):
     scene, _cloud = blob_scene(tmp_path, width=16, height=12)
-    scene.spectral.renderer = "CYCLES"
-    scene.spectral.emulation_bands = 3
+    scene.spectral.renderer = "CYCLES"  # with the automatic bands: a grey cloud under one sun needs one
     scene.spectral.samples = 4
     bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.0, 3.0, -3.0))  # out of view: only its warning counts
     marble = bpy.data.materials.new("Marble")
@@ -321,8 +320,10 @@ def test_render_to_image_uses_the_emulation_when_chosen(registered, tmp_path, ca
     bpy.context.object.data.materials.append(marble)
     exr = tmp_path / "emulated.exr"
     assert bpy.ops.spectral.render_image(image_name="Emulated", exr_path=str(exr)) == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert "Cycles emulation: 1 bands in 1 Cycles render(s), estimated colour error ΔE00 0.00" in out
     # Found while rendering, shown when it ends.
-    assert "Warning: material 'Marble': colours computed by nodes" in capfd.readouterr().out
+    assert "Warning: material 'Marble': colours computed by nodes" in out
     image = bpy.data.images["Emulated"]
     assert image.is_float and tuple(image.size) == (16, 12)
     pixels = np.array(image.pixels[:], dtype=np.float32).reshape(12, 16, 4)[::-1]
@@ -406,7 +407,30 @@ def test_panels_say_what_the_emulation_cannot_do(registered):
         render_ui.draw_render_main(settings, scene)
         assert any("nothing is re-emitted" in text for text in fluorescence.texts()) == shown
         assert any("no re-emission" in text for text in settings.texts()) == shown
-        assert (("prop", (scene.spectral, "emulation_bands"), {}) in settings.calls) == shown
+        assert (("prop", (scene.spectral, "emulation_band_mode"), {}) in settings.calls) == shown
+
+
+def test_estimate_bands_shows_the_plan_in_the_panel(registered, tmp_path):
+    """Automatic bands: the panel offers the budget and Estimate Bands, which shows the plan without
+    rendering; Fixed bands: the count instead."""
+    from addon.ui import render as render_ui
+    from tests.addon.recording import RecordingLayout
+
+    scene, cloud = blob_scene(tmp_path)
+    scene.spectral.renderer = "CYCLES"
+    settings = cloud.material_slots[0].material.spectral
+    settings.albedo.source, settings.albedo.color = "COLOR", (0.9, 0.45, 0.15)
+    assert bpy.ops.spectral.estimate_emulation_bands() == {"FINISHED"}
+    panel = RecordingLayout()
+    render_ui.draw_render_main(panel, scene)
+    assert ("prop", (scene.spectral, "emulation_max_renders"), {}) in panel.calls
+    assert any(call[0] == "operator" and call[1][0] == "spectral.estimate_emulation_bands" for call in panel.calls)
+    assert any("Cycles render(s), estimated colour error ΔE00" in text for text in panel.texts())
+    scene.spectral.emulation_band_mode = "FIXED"
+    panel = RecordingLayout()
+    render_ui.draw_render_main(panel, scene)
+    assert ("prop", (scene.spectral, "emulation_bands"), {}) in panel.calls
+    assert ("prop", (scene.spectral, "emulation_max_renders"), {}) not in panel.calls
 
 
 def test_cli_follows_the_scene_renderer(registered, tmp_path):
@@ -415,14 +439,15 @@ def test_cli_follows_the_scene_renderer(registered, tmp_path):
     from pathlib import Path
 
     scene, _cloud = blob_scene(tmp_path, width=16, height=12)
-    scene.spectral.renderer, scene.spectral.emulation_bands, scene.spectral.samples = "CYCLES", 3, 2
+    scene.spectral.renderer, scene.spectral.samples = "CYCLES", 2
+    scene.spectral.emulation_band_mode, scene.spectral.emulation_bands = "FIXED", 3
     blend = tmp_path / "scene.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
     out = tmp_path / "cli.exr"
     done = subprocess.run([sys.executable, "-m", "addon.cli", "render", str(blend), "--out", str(out), "--quiet"],
                           cwd=Path(__file__).resolve().parents[2], capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
-    assert "Cycles emulation, 1 × 2 Cycles renders" in done.stdout
+    assert "Cycles emulation: 3 equal bands in 1 Cycles render(s), each made twice" in done.stdout
     channels = image_io.read_exr(out)
     assert channels["spectral.Y"].shape == (12, 16) and channels["spectral.Y"].max() > 0.01
     assert "variance.Y" in channels
