@@ -6,9 +6,9 @@ rendered by the tracer and by the emulation at `--scale` × its resolution, both
 the scene's samples. Objects of interest: the cubes' front faces (`metrics.face_mask`), the sky far from
 the sun and the ring around it (`metrics.sky_regions`), the flame's bright pixels in the tracer's image
 (`metrics.flame_mask`). For each, CIEDE2000 between the two engines' mean colours, the white being the
-scene's sun at the tracer's 99th-percentile luminance. Beside the measured error (largest over the
-objects), the band plan's estimate (`band_plan.estimate`), the Cycles renders (each made twice) and the
-emulation's seconds.
+scene's sun (D65 for the glowing flame) at the tracer's 99th-percentile luminance. Beside the measured
+error (largest over the objects), the band plan's estimate (`band_plan.estimate`), the Cycles renders
+(each made twice) and the emulation's seconds.
 
     python -m bench.emulation_demos                 # half size, 2 × each scene's samples
     python -m bench.emulation_demos --only metamers_a --scale 0.25
@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 from addon import cli  # noqa: E402
 from addon.cycles_emulation import band_plan  # noqa: E402
 from addon.cycles_emulation.job import EmulationJob  # noqa: E402
-from addon.tracer import colorimetry  # noqa: E402
+from addon.tracer import colorimetry, spectra  # noqa: E402
 from addon.tracer.render import render  # noqa: E402
 from bench.measure import machine  # noqa: E402
 from demo_blends import build_blends, metrics, run_demos, scenes  # noqa: E402
@@ -47,6 +47,13 @@ def regions(name: str, scene, traced_xyz: np.ndarray) -> dict:
         return {"flame": metrics.flame_mask(traced_xyz)}
     return {f"{side} cube": metrics.face_mask(scene.camera, centre, scenes.CUBE_EDGE)
             for side, centre in zip(("left", "right"), scenes.CUBE_CENTRES)}
+
+
+def display_white(name: str, scene) -> np.ndarray:
+    """The white's XYZ at Y = 1: the scene's sun, or D65 where the object glows (the fire's flame)."""
+    white = colorimetry.spectrum_to_xyz(spectra.illuminant("D65").values) if name == "fire" else \
+        metrics.light_xyz(metrics.sun(scene))
+    return white / white[1]
 
 
 @dataclass
@@ -73,8 +80,7 @@ def compare(name: str, scale: float, quality: float) -> tuple[dict, list[Emulate
     scene = replace(export.scene, settings=replace(export.scene.settings, spp=spp))
     traced = render(scene).film
     masks = regions(name, scene, traced.xyz)
-    white = metrics.light_xyz(metrics.sun(scene))
-    white = white / white[1] * np.percentile(traced.xyz[..., 1], 99)
+    white = display_white(name, scene) * np.percentile(traced.xyz[..., 1], 99)
     rows = []
     for label, band_count in (("automatic", None), (f"{EQUAL_BANDS} equal", EQUAL_BANDS)):
         job = EmulationJob(blender_scene, scene, band_count=band_count, spp=spp)

@@ -6,18 +6,20 @@ spectra's shape inside each band, made worse wherever the medium's optics bend t
 stand for what the eye can see in a scene: every light (and the World, zenith and horizon) at luminance
 1, on its own and seen through each medium's optics in simple ways whose answer is known both for a
 spectrum and for band means:
-- single scattering: the albedo a(λ), and where the anisotropy g(λ) varies, a(λ) · 4π p_HG(cosθ, g(λ))
-  at the scattering angles PHASE_ANGLES;
-- a thick medium: its diffuse reflectance R(a) = (1 − √(1−a)) / (1 + √(1−a)) (two-stream, a
-  semi-infinite isotropic medium), which stretches differences near a = 1 where multiple scattering
-  lives;
-- where the extinction varies (ε(λ): the extinction over its largest value in the rendered range): a
-  thin medium's scattering a · ε, transmittance exp(−τ ε) and light scattered on the way a · ε · exp(−τ ε),
-  at relative optical depths τ ∈ TRANSMITTANCE_DEPTHS;
+- a thin medium (`optical_thickness` below THIN_BELOW), seen by single scattering: the albedo a(λ);
+  where the anisotropy g(λ) varies, a(λ) · 4π p_HG(cosθ, g(λ)) at the scattering angles PHASE_ANGLES;
+  where the extinction varies (ε(λ): the extinction over its largest value in the rendered range), its
+  scattering a · ε and the light scattered on the way a · ε · exp(−τ ε) at relative optical depths
+  τ ∈ TRANSMITTANCE_DEPTHS;
+- a thick medium (optical thickness above THICK_ABOVE), seen by its multiple scattering: its diffuse
+  reflectance R(a) = (1 − √(1−a)) / (1 + √(1−a)) (two-stream, a semi-infinite isotropic medium), which
+  stretches differences near a = 1;
+- every medium whose extinction varies: its transmittance exp(−τ ε);
 - a hot medium's glow (Planck's law at its hottest temperature, times 1 − a).
 For each probe: XYZ of the full spectrum against what the emulation renders (the same function of the
 band means, `parameters.medium_bands`, summed with the band weights `bands.xyz_weights`), as CIEDE2000
-against the light as white (a glow against itself). The estimate is the largest ΔE00 over the probes.
+against the light as white (a glow against D65 at its luminance, the display's white). The estimate is
+the largest ΔE00 over the probes.
 Multiple scattering through several media or paths is not modelled: the estimate is a guide to how
 many bands a scene's spectra need, checked against renders in `bench/cycles_emulation.py`.
 
@@ -45,6 +47,7 @@ TARGET_DELTA_E = 0.5
 DEFAULT_MAX_RENDERS = 12
 TRANSMITTANCE_DEPTHS = (1.0, 4.0)
 PHASE_ANGLES = (5.0, 30.0, 90.0, 150.0)  # degrees
+THIN_BELOW, THICK_ABOVE = 3.0, 1.0  # optical thickness: single scattering, multiple scattering (both between)
 SENSITIVITY_FLOOR = 0.02  # of the eye's peak sensitivity: bands still cover the ends of the range
 
 
@@ -106,6 +109,19 @@ def _varies(values, inside) -> bool:
     return bool(np.ptp(np.asarray(values)[inside]) > 0)
 
 
+def optical_thickness(medium, inside: np.ndarray) -> float:
+    """How thick the medium is for light: the smallest, over the grid's three axes, of the median optical
+    depth of its non-empty columns (at the extinction's mean over the rendered range)."""
+    values, voxel = medium.density.values, np.linalg.norm(medium.density.index_to_world[:3, :3], axis=0)
+    extinction = float(np.mean(medium.extinction.values[inside])) * medium.density_scale
+    depths = []
+    for axis in range(3):
+        columns = values.sum(axis=axis, dtype=np.float64) * voxel[axis]
+        filled = columns[columns > 0]
+        depths.append(float(np.median(filled)) if filled.size else 0.0)
+    return min(depths) * extinction
+
+
 def _probes(scene: Scene, inside: np.ndarray) -> list[_Probe]:
     shapes = []
     for light in scene.lights:
@@ -114,15 +130,22 @@ def _probes(scene: Scene, inside: np.ndarray) -> list[_Probe]:
             shapes.append(parameters.unit_luminance(light, light.horizon_spectrum))
     probes = [_Probe(shape, None, "light") for shape in shapes]
     for medium in scene.media:
+        thickness = optical_thickness(medium, inside)
+        thin, thick = thickness < THIN_BELOW, thickness > THICK_ABOVE
+        chromatic = _varies(medium.extinction.values, inside)
         for shape in shapes:
             for level in range(medium.albedo_table.shape[0]):
-                probes += [_Probe(shape, medium, "single", level=level), _Probe(shape, medium, "thick", level=level)]
-                if medium.phase == "hg" and _varies(medium.anisotropy.values, inside):
-                    probes += [_Probe(shape, medium, "phase", angle=angle, level=level) for angle in PHASE_ANGLES]
-            if _varies(medium.extinction.values, inside):
+                if thin:
+                    probes.append(_Probe(shape, medium, "single", level=level))
+                    if medium.phase == "hg" and _varies(medium.anisotropy.values, inside):
+                        probes += [_Probe(shape, medium, "phase", angle=angle, level=level) for angle in PHASE_ANGLES]
+                if thick:
+                    probes.append(_Probe(shape, medium, "thick", level=level))
+            if chromatic:
+                probes += [_Probe(shape, medium, "transmitted", depth) for depth in TRANSMITTANCE_DEPTHS]
+            if chromatic and thin:
                 probes.append(_Probe(shape, medium, "thin"))
-                probes += [_Probe(shape, medium, factor, depth) for depth in TRANSMITTANCE_DEPTHS
-                           for factor in ("transmitted", "scattered")]
+                probes += [_Probe(shape, medium, "scattered", depth) for depth in TRANSMITTANCE_DEPTHS]
         if medium.emission is not None:
             probes.append(_Probe(np.ones(GRID.size), medium, "glow"))
     return probes
@@ -148,10 +171,14 @@ class _Estimator:
         full = np.array([self._full_spectrum(probe) for probe in self.probes])
         self.full_spectra = full * self.inside
         self.full_xyz = colorimetry.spectrum_to_xyz(self.full_spectra, self.cmf)
+        # White: the probe's light, or for a glow the display's D65 at the glow's luminance; XYZ scaled so
+        # that the white has Y = 1.
+        d65 = colorimetry.spectrum_to_xyz(spectra.illuminant("D65").values * self.inside, self.cmf)
         whites = np.array([colorimetry.spectrum_to_xyz(probe.light * self.inside, self.cmf)
-                           if probe.factor != "glow" else xyz for probe, xyz in zip(self.probes, self.full_xyz)])
+                           if probe.factor != "glow" else d65 / d65[1] * xyz[1]
+                           for probe, xyz in zip(self.probes, self.full_xyz)])
         self.whites = whites / np.maximum(whites[:, 1:2], 1e-300)
-        self.scale = 1.0 / np.maximum(np.array([w[1] for w in whites]), 1e-300)
+        self.scale = 1.0 / np.maximum(whites[:, 1], 1e-300)
 
     def _full_spectrum(self, probe: _Probe) -> np.ndarray:
         medium = probe.medium

@@ -18,9 +18,10 @@ def comb(period=40.0, low=0.2, high=0.9) -> spectra.Spectrum:
     return spectra.Spectrum(low + (high - low) * 0.5 * (1.0 + np.sin(2.0 * np.pi * GRID / period)))
 
 
-def cube_scene(albedo, light=None, g=0.0):
+def cube_scene(albedo, light=None, g=0.0, scale=4.0):
+    """A 2-unit box of optical thickness 2 × `scale` (thick by default) under a sun."""
     light_spectrum = spectra.illuminant(light) if light else None
-    return s.scene(s.perspective_camera(8, 8), [s.medium(s.box_grid(), scale=4.0, albedo=albedo, g=g)],
+    return s.scene(s.perspective_camera(8, 8), [s.medium(s.box_grid(), scale=scale, albedo=albedo, g=g)],
                    [s.sun([0.2, -0.3, 1.0], spectrum=light_spectrum)])
 
 
@@ -100,12 +101,21 @@ def test_a_budget_below_one_render_is_refused():
 
 
 def test_anisotropy_and_extinction_that_vary_with_wavelength_colour_the_estimate():
-    """Grey albedo under a flat light: exact with one band, unless the phase function (the report's sky:
+    """Thin grey air under a flat light: exact with one band, unless the phase function (the report's sky:
     g rising with λ) or the extinction (Rayleigh's λ⁻⁴) changes the colour of scattered light."""
-    assert band_plan.estimate(cube_scene(0.8), bands.split(360, 830, 1)) < 1e-6
-    by_phase = cube_scene(0.8, g=s.smooth_spectrum(0.0, 0.9))
-    thin_blue = s.scene(s.perspective_camera(8, 8), [s.medium(s.box_grid(), extinction=spectra.Spectrum(
+    assert band_plan.estimate(cube_scene(0.8, scale=0.2), bands.split(360, 830, 1)) < 1e-6
+    by_phase = cube_scene(0.8, g=s.smooth_spectrum(0.0, 0.9), scale=0.2)
+    thin_blue = s.scene(s.perspective_camera(8, 8), [s.medium(s.box_grid(), scale=0.2, extinction=spectra.Spectrum(
         (GRID / 550.0) ** -4.0), albedo=1.0, phase="rayleigh")], [s.sun([0.2, -0.3, 1.0])])
     for scene in (by_phase, thin_blue):
         assert band_plan.estimate(scene, bands.split(360, 830, 1)) > 2.0
         assert band_plan.plan_bands(scene, max_renders=32).estimate < band_plan.TARGET_DELTA_E
+
+
+def test_optical_thickness_picks_the_probes():
+    """A thin box is judged by single scattering, a thick one by its diffuse reflectance: the thin one's
+    estimate with equal bands is larger (single scattering keeps the albedo's full contrast)."""
+    assert band_plan.optical_thickness(cube_scene(0.8, scale=0.2).media[0], GRID >= 360) == pytest.approx(0.4)
+    equal = bands.split(360, 830, 6)
+    thin, thick = (band_plan.estimate(cube_scene(knotted(), "D65", scale=scale), equal) for scale in (0.2, 10.0))
+    assert thin > thick > 0.0
