@@ -101,8 +101,7 @@ class PassMerger:
             del self.waiting[(band, self.next_pass[band])]
             for tile_index in sorted(parts):
                 x0, y0, _, _ = self.tiles[tile_index]
-                self.film.add(band, y0, x0, *parts[tile_index])
-            self.film.count(band, self.sizes[self.next_pass[band]])
+                self.film.add(band, y0, x0, *parts[tile_index], self.sizes[self.next_pass[band]])
             self.next_pass[band] += 1
 
     @property

@@ -1,11 +1,15 @@
-"""Renders a scene: splits the work into (band, sample range, tile) units, runs them on a backend,
-and accumulates them on a `Film`, with progress callbacks and cancellation between passes.
+"""Renders a scene: splits the work into units (a tile of one band's pass, about a quarter of a second of
+work each), runs them on a backend and adds them to a `Film`, with progress by samples done and
+cancellation between units.
 
 `render_unit` is the pure unit of work (also what distributed workers run): its result depends only on
-(scene, band, sample range, tile, seed), so any split of the work gives the same image.
+(scene, band, sample range, tile, seed), so any split of the work gives the same image. The passes
+(sample ranges) depend only on the sample count, and every pixel receives them in order, so the film's
+sums are formed exactly as by `distributed.render`, whatever the tiles.
 """
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -53,13 +57,65 @@ def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], 
     return sum_xyz, sum_sq
 
 
-def pass_sizes(spp: int, first: int = 1, largest: int = 16) -> list[int]:
-    """Samples per pass: doubling from `first` up to `largest`, so the first image comes quickly."""
-    sizes, size = [], first
-    while sum(sizes) < spp:
-        sizes.append(min(size, spp - sum(sizes)))
+def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
+    """(first sample, samples) of each pass: sizes doubling from `first` up to `largest`, so the first
+    image comes quickly."""
+    begin, size = 0, first
+    while begin < spp:
+        count = min(size, spp - begin)
+        yield begin, count
+        begin += count
         size = min(size * 2, largest)
-    return sizes
+
+
+def pass_sizes(spp: int, first: int = 1, largest: int = 16) -> list[int]:
+    """Samples per pass (see `passes`)."""
+    return [count for _, count in passes(spp, first, largest)]
+
+
+UNIT_SECONDS = 0.25
+FIRST_UNIT = 1024  # pixel-samples of the first unit, before any throughput is known
+GROWTH = 4  # a unit has at most this many times the pixel-samples of the one before
+
+
+class Tiler:
+    """Cuts passes into tiles of about `seconds` of work each, sized from the throughput measured so far.
+
+    Tiles are runs of whole rows (or part of one row when a row is more work than a unit), in reading
+    order. The cost per pixel-sample is tracked pessimistically (it rises at once and falls by halves),
+    since tiles differ: a tile sized on empty sky may land on a dense cloud."""
+
+    def __init__(self, width: int, height: int, seconds: float = UNIT_SECONDS):
+        self.width, self.height, self.seconds = width, height, seconds
+        self.cost = None  # seconds per pixel-sample
+        self.last = FIRST_UNIT // GROWTH  # pixel-samples of the last unit
+
+    def measured(self, pixel_samples: int, seconds: float) -> None:
+        cost = seconds / pixel_samples
+        self.cost = cost if self.cost is None or cost > self.cost else (self.cost + cost) / 2
+        self.last = pixel_samples
+
+    def _pixels(self, samples: int) -> int:
+        budget = self.last * GROWTH
+        if self.cost is not None:
+            budget = min(budget, self.seconds / self.cost)
+        return max(1, int(budget // samples))
+
+    def tiles(self, samples: int) -> Iterator[tuple[int, int, int, int]]:
+        """Tiles (x0, y0, width, height) covering the image once, for a pass of `samples` per pixel."""
+        x, y = 0, 0
+        while y < self.height:
+            pixels = self._pixels(samples)
+            if x == 0 and pixels >= self.width:
+                rows = min(pixels // self.width, self.height - y)
+                yield 0, y, self.width, rows
+                y += rows
+            else:
+                columns = min(pixels, self.width - x)
+                yield x, y, columns, 1
+                x += columns
+                if x == self.width:
+                    x, y = 0, y + 1
 
 
 @dataclass
@@ -71,9 +127,12 @@ class RenderResult:
 
 
 def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, backend: str | None = None,
-           threads: int | None = None, progress=None, cancel=None) -> RenderResult:
-    """Render `scene`. `progress(film, done_fraction)` is called after each pass; `cancel()` is asked
-    between passes and, when true, stops the render (the result says `cancelled`)."""
+           threads: int | None = None, progress=None, cancel=None, notice=None,
+           unit_seconds: float = UNIT_SECONDS) -> RenderResult:
+    """Render `scene`. `progress(film, fraction)` is called after each unit of work, with the fraction of
+    all samples done; `cancel()` is asked before each unit (and while the kernel compiles) and, when true,
+    stops the render (the result says `cancelled`; the film holds the units done). `notice(text)` is told
+    what the render waits for before it starts (the kernel compiling). Units take about `unit_seconds`."""
     settings = scene.settings
     spp = settings.spp if spp is None else int(spp)
     seed = settings.seed if seed is None else int(seed)
@@ -87,33 +146,47 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     bands = band_scenes(scene)
     camera = scene.camera
     film = Film(camera.width, camera.height, len(bands))
-    tile = (0, 0, camera.width, camera.height)
-    sizes = pass_sizes(spp)
-    total_units = len(sizes) * len(bands)
-    done_units = 0
-    begin = 0
-    cancelled = False
-    for size in sizes:
-        for band, kernel_scene in enumerate(bands):
-            if cancel is not None and cancel():
-                cancelled = True
-                break
-            sum_xyz, sum_sq = render_unit(kernel_scene, band, (begin, begin + size), tile, seed, backend)
-            film.add(band, 0, 0, sum_xyz, sum_sq)
-            film.count(band, size)
-            done_units += 1
-            if progress is not None:
-                progress(film, done_units / total_units)
-        if cancelled:
+    total = camera.width * camera.height * spp * len(bands)
+    done = 0
+    cancelled = backend == "numba" and not _kernel_ready(module, bands[0], seed, cancel, notice)
+    tiler = Tiler(camera.width, camera.height, unit_seconds)
+    for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler):
+        if cancel is not None and cancel():
+            cancelled = True
             break
-        begin += size
+        unit_start = time.perf_counter()
+        sum_xyz, sum_sq = render_unit(bands[band], band, samples, tile, seed, backend)
+        pixel_samples = tile[2] * tile[3] * (samples[1] - samples[0])
+        tiler.measured(pixel_samples, time.perf_counter() - unit_start)
+        film.add(band, tile[1], tile[0], sum_xyz, sum_sq, samples[1] - samples[0])
+        done += pixel_samples
+        if progress is not None:
+            progress(film, done / total)
     seconds = time.perf_counter() - start
     return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend))
 
 
+def _units(spp: int, bands: int, tiler: Tiler):
+    """(band, sample range, tile) of each unit: passes in order, each band's pass tile by tile."""
+    for begin, size in passes(spp):
+        for band in range(bands):
+            for tile in tiler.tiles(size):
+                yield band, (begin, begin + size), tile
+
+
+def _kernel_ready(module, kernel_scene: KernelScene, seed: int, cancel, notice) -> bool:
+    """Compile the Numba kernel (or load it from its cache) on one path, cancellably; False if cancelled."""
+    from .kernels import numba_cache
+
+    def first_call():
+        render_unit(kernel_scene, 0, (0, 1), (0, 0, 1, 1), seed, "numba")
+
+    return numba_cache.ready(module.render_tile, first_call, cancel, notice)
+
+
 def render_stats(film: Film, seconds: float, backend: str) -> dict:
     """Timing, throughput and mean XYZ of a finished (or cancelled) render, for --stats and the UI."""
-    pixel_samples = int(film.samples.sum()) * film.width * film.height
+    pixel_samples = int(film.pixel_samples.sum())
     return {
         "seconds": seconds,
         "samples_per_pixel": int(film.samples.min()) if film.samples.size else 0,
