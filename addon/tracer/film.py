@@ -60,6 +60,12 @@ class Film:
         return (self.sum_xyz / counts).sum(axis=0)
 
     @property
+    def mean_xyz(self) -> np.ndarray:
+        """Mean of `xyz` over the image, without forming `xyz` (quick at any size)."""
+        weights = 1.0 / np.maximum(self.pixel_samples, 1)
+        return np.einsum("bhwc,bhw->c", self.sum_xyz, weights) / (self.width * self.height)
+
+    @property
     def variance(self) -> np.ndarray:
         """Variance of the XYZ estimate per pixel (sample variance / samples, summed over bands)."""
         counts = self.pixel_samples[..., None].astype(np.float64)
