@@ -20,16 +20,21 @@ EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 class ProgressBar:
-    """A one-line text progress bar on a stream (rewritten in place); `notice(text)` writes a line above it."""
+    """A one-line text progress bar on a stream (rewritten in place at most every `interval` seconds);
+    `notice(text)` writes a line above it."""
 
-    def __init__(self, stream=sys.stderr, width: int = 30):
+    def __init__(self, stream=sys.stderr, width: int = 30, interval: float = 0.1):
         self.stream, self.width, self.start = stream, width, time.perf_counter()
+        self.interval, self.shown = interval, -interval
         self.time_left = TimeLeft()
 
     def __call__(self, _film, fraction: float) -> None:
-        filled = int(round(fraction * self.width))
         elapsed = time.perf_counter() - self.start
         remaining = self.time_left(fraction)
+        if elapsed - self.shown < self.interval and fraction < 1:
+            return
+        self.shown = elapsed
+        filled = int(round(fraction * self.width))
         left = "" if remaining is None else f", ~{remaining:5.1f}s left"
         self.stream.write(f"\r[{'#' * filled}{'.' * (self.width - filled)}] {fraction:6.1%} "
                           f"{elapsed:6.1f}s elapsed{left}")

@@ -77,13 +77,14 @@ def test_the_progress_bar_estimates_the_time_left_from_the_samples_done_since_it
 
     from addon.tracer import cli
 
-    clock = iter([0.0, 100.0, 100.0, 101.0, 101.0])  # the bar's start, then elapsed and time left per report
+    clock = iter([0.0, 100.0, 100.0, 100.01, 100.01, 101.0, 101.0])  # start, then elapsed and time left per report
     monkeypatch.setattr(cli.time, "perf_counter", lambda: next(clock))
     stream = io.StringIO()
-    bar = cli.ProgressBar(stream)
+    bar = cli.ProgressBar(stream, interval=0.1)
     bar(None, 0.1)  # after 100 s of compiling: no estimate yet
+    bar(None, 0.11)  # 10 ms later: not shown
     bar(None, 0.2)  # 1 s for 10 %: 8 s left
-    assert "left" not in stream.getvalue().split("\r")[1]
-    assert stream.getvalue().split("\r")[2].endswith("~  8.0s left")
+    lines = stream.getvalue().split("\r")
+    assert len(lines) == 3 and "left" not in lines[1] and lines[2].endswith("~  8.0s left")
     bar.notice("a line of its own")
     assert stream.getvalue().endswith("a line of its own\n")
