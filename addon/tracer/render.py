@@ -75,7 +75,7 @@ def pass_sizes(spp: int, first: int = 1, largest: int = 16) -> list[int]:
 
 UNIT_SECONDS = 0.2  # aimed below the 0.25 s a unit may take, since tiles differ in cost
 FIRST_UNIT = 1024  # pixel-samples of the first unit, before any throughput is known
-GROWTH = 4  # a unit has at most this many times the pixel-samples of the one before
+GROWTH = 4  # a unit has at most this many times the pixel-samples of the largest one measured
 
 
 class Tiler:
@@ -88,15 +88,15 @@ class Tiler:
     def __init__(self, width: int, height: int, seconds: float = UNIT_SECONDS):
         self.width, self.height, self.seconds = width, height, seconds
         self.cost = None  # seconds per pixel-sample
-        self.last = FIRST_UNIT // GROWTH  # pixel-samples of the last unit
+        self.largest = FIRST_UNIT // GROWTH  # pixel-samples of the largest unit measured
 
     def measured(self, pixel_samples: int, seconds: float) -> None:
         cost = seconds / pixel_samples
         self.cost = cost if self.cost is None or cost > self.cost else (self.cost + cost) / 2
-        self.last = pixel_samples
+        self.largest = max(self.largest, pixel_samples)
 
     def _pixels(self, samples: int) -> int:
-        budget = self.last * GROWTH
+        budget = self.largest * GROWTH
         if self.cost is not None:
             budget = min(budget, self.seconds / self.cost)
         return max(1, int(budget // samples))

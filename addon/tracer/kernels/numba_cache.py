@@ -30,7 +30,7 @@ PACKAGE = __name__.rpartition(".kernels.")[0]  # "addon.tracer", or "bl_ext.<rep
 KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "compile.py", "phase.py", "sampling.py", "planck.py",
                   "shared_math.py", "wavelengths.py")
 COMPILE_SECONDS_FILE = "compile-seconds.txt"
-DEFAULT_COMPILE_SECONDS = 90.0  # the last measured cold compile on a 2-core machine (bench/README.md)
+DEFAULT_COMPILE_SECONDS = 90.0  # until measured here: cold compiles took 60–105 s on a 2-core VM (bench/README.md)
 NOTICE_AFTER_SECONDS = 1.0  # loading a cached kernel takes less; compiling it takes minutes
 POLL_SECONDS = 0.05
 UNUSED_DAYS = 30  # key folders not used for this long (older sources or versions) are removed
