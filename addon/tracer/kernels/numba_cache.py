@@ -5,7 +5,7 @@ The folder is `$SPECTRAL_VOLUME_CACHE_DIR` when set, else the platform's per-use
 on macOS, `%LOCALAPPDATA%\\spectral_volume\\Cache` on Windows). Inside it, kernels live in one sub-folder per
 key: the kernel sources (Numba's own check sees only the cached function's file, but the kernels inline
 code from several modules), the package the tracer was imported as (a cache written as `addon.tracer`
-cannot be read as `bl_ext.<repo>.spectral_volume.tracer`: its index names the package's classes), the
+cannot be read as `bl_ext.<repo>.spectral_volume.addon.tracer`: its index names the package's classes), the
 Python, Numba and llvmlite versions and the CPU. A cache that cannot be read means a recompile and one
 that cannot be written means none: the cache never fails a render.
 
@@ -26,7 +26,7 @@ from numba.core.caching import CompileResultCacheImpl, FunctionCache, InTreeCach
 APP = "spectral_volume"
 CACHE_DIR_VARIABLE = "SPECTRAL_VOLUME_CACHE_DIR"
 TRACER = Path(__file__).resolve().parent.parent
-PACKAGE = __name__.rpartition(".kernels.")[0]  # "addon.tracer", or "bl_ext.<repo>.spectral_volume.tracer"
+PACKAGE = __name__.rpartition(".kernels.")[0]  # "addon.tracer" or "bl_ext.<repo>.spectral_volume.addon.tracer"
 KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "compile.py", "phase.py", "sampling.py", "planck.py",
                   "shared_math.py", "wavelengths.py")
 COMPILE_SECONDS_FILE = "compile-seconds.txt"
@@ -62,9 +62,13 @@ def cache_key() -> dict:
     import numba
     from llvmlite import binding
 
+    try:
+        features = binding.get_host_cpu_features().flatten()
+    except RuntimeError:  # LLVM cannot list them on this platform: the CPU's name has to do
+        features = ""
     return {"sources": sources_digest(), "package": PACKAGE, "python": sys.implementation.cache_tag,
             "numba": numba.__version__, "llvmlite": llvmlite.__version__, "cpu": binding.get_host_cpu_name(),
-            "cpu_features": binding.get_host_cpu_features().flatten()}
+            "cpu_features": features}
 
 
 def kernel_folder(root: Path | None = None) -> Path:
