@@ -121,3 +121,18 @@ def test_ready_raises_what_the_first_call_raised(monkeypatch, tmp_path):
 
     with pytest.raises(ValueError, match="bad scene"):
         numba_cache.ready(dispatcher, first_call)
+
+
+def test_key_folders_unused_for_a_month_are_removed(monkeypatch, tmp_path):
+    import os
+    import time
+
+    old, recent = tmp_path / "kernels-old", tmp_path / "kernels-recent"
+    for folder in (old, recent):
+        folder.mkdir()
+        (folder / "key.json").write_text("{}")
+        (folder / "render_tile.nbi").write_text("")
+    month_ago = time.time() - (numba_cache.UNUSED_DAYS + 1) * 86400
+    os.utime(old / "key.json", (month_ago, month_ago))
+    kernel(tmp_path, monkeypatch)
+    assert not old.exists() and recent.exists() and numba_cache.kernel_folder(tmp_path).exists()

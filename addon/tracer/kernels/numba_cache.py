@@ -71,18 +71,19 @@ def cache_key() -> dict:
             "cpu_features": features}
 
 
-def kernel_folder(root: Path | None = None) -> Path:
-    """The folder of the kernels compiled for the current key."""
-    key = json.dumps(cache_key(), sort_keys=True)
-    return (root or user_cache_root()) / f"kernels-{hashlib.sha256(key.encode()).hexdigest()[:16]}"
+def kernel_folder(root: Path | None = None, key: dict | None = None) -> Path:
+    """The folder of the kernels compiled for `key` (default: the current key)."""
+    text = json.dumps(key or cache_key(), sort_keys=True)
+    return (root or user_cache_root()) / f"kernels-{hashlib.sha256(text.encode()).hexdigest()[:16]}"
 
 
 def _usable_folder() -> Path | None:
     """The current key's folder, created and marked as used, or None when it cannot be written."""
     try:
-        folder = kernel_folder()
+        key = cache_key()
+        folder = kernel_folder(key=key)
         folder.mkdir(parents=True, exist_ok=True)
-        (folder / "key.json").write_text(json.dumps(cache_key(), indent=1, sort_keys=True))
+        (folder / "key.json").write_text(json.dumps(key, indent=1, sort_keys=True))
         _remove_unused(folder.parent, keep=folder)
         return folder
     except OSError:
