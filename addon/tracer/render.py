@@ -49,12 +49,17 @@ def band_scenes(scene: Scene, kernel_scene: KernelScene | None = None) -> list[K
 def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
                 seed: int, backend: str = "numba") -> tuple[np.ndarray, np.ndarray]:
     """Σ XYZ and Σ XYZ² over samples [begin, end) of each pixel in tile (x0, y0, width, height)."""
+    arguments = _tile_arguments(kernel_scene, band, samples, tile, seed)
+    backend_module(backend).render_tile(*arguments)
+    return arguments[-2:]
+
+
+def _tile_arguments(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
+                    seed: int) -> tuple:
+    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last two)."""
     x0, y0, width, height = tile
-    sum_xyz = np.zeros((height, width, 3))
-    sum_sq = np.zeros((height, width, 3))
-    backend_module(backend).render_tile(kernel_scene, x0, y0, width, height, samples[0], samples[1],
-                                        seed, band, sum_xyz, sum_sq)
-    return sum_xyz, sum_sq
+    return (kernel_scene, x0, y0, width, height, samples[0], samples[1], seed, band, np.zeros((height, width, 3)),
+            np.zeros((height, width, 3)))
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
@@ -175,13 +180,16 @@ def _units(spp: int, bands: int, tiler: Tiler):
 
 
 def _kernel_ready(module, kernel_scene: KernelScene, seed: int, cancel, notice) -> bool:
-    """Compile the Numba kernel (or load it from its cache) on one path, cancellably; False if cancelled."""
+    """Compile the Numba kernel for the scene's argument types (or load it from its cache), cancellably;
+    False if cancelled. Compiling without running leaves nothing to run in the background after a cancel
+    (Numba's workqueue threading layer aborts when two threads launch kernels at once)."""
+    import numba
+
     from .kernels import numba_cache
 
-    def first_call():
-        render_unit(kernel_scene, 0, (0, 1), (0, 0, 1, 1), seed, "numba")
-
-    return numba_cache.ready(module.render_tile, first_call, cancel, notice)
+    arguments = _tile_arguments(kernel_scene, 0, (0, 1), (0, 0, 1, 1), seed)
+    signature = tuple(numba.typeof(argument) for argument in arguments)
+    return numba_cache.ready(module.render_tile, lambda: module.render_tile.compile(signature), cancel, notice)
 
 
 def render_stats(film: Film, seconds: float, backend: str) -> dict:
