@@ -25,3 +25,17 @@ def test_an_empty_film_is_black_with_no_variance():
     film = Film(3, 2)
     assert film.samples.tolist() == [0]
     assert not film.xyz.any() and not film.variance.any() and not film.mean_xyz.any()
+
+
+def test_variance_is_the_sample_variance_of_the_mean_summed_over_bands():
+    rng = np.random.default_rng(5)
+    values = rng.random((2, 7, 2, 3, 3))  # band, sample, rows, columns, XYZ
+    film = Film(3, 2, bands=2)
+    for band in range(2):
+        for sample in values[band]:
+            film.add(band, 0, 0, sample, sample**2, 1)
+    expected = (values.var(axis=1, ddof=1) / 7).sum(axis=0)
+    np.testing.assert_allclose(film.variance, expected, rtol=1e-12)
+    one = Film(3, 2)
+    one.add(0, 0, 0, values[0, 0], values[0, 0] ** 2, 1)
+    assert not one.variance.any()  # one sample says nothing about the spread
