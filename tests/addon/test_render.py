@@ -102,9 +102,9 @@ def compiling(monkeypatch):
     """The kernel "compiles" on every render: it says so, then renders as usual."""
     from addon.tracer.kernels import numba_cache
 
-    def ready(dispatcher, first_call, cancel=None, notice=None):
+    def ready(dispatcher, prepare, cancel=None, notice=None):
         notice(numba_cache.compiling_message())
-        first_call()
+        prepare()
         return True
 
     monkeypatch.setattr(numba_cache, "ready", ready)

@@ -62,9 +62,9 @@ def test_the_cli_says_when_the_kernel_compiles(write_scene, tmp_path, monkeypatc
     from addon.tracer import cli
     from addon.tracer.kernels import numba_cache
 
-    def compiling(dispatcher, first_call, cancel=None, notice=None):
+    def compiling(dispatcher, prepare, cancel=None, notice=None):
         notice(numba_cache.compiling_message())
-        first_call()
+        prepare()
         return True
 
     monkeypatch.setattr(numba_cache, "ready", compiling)

@@ -85,7 +85,7 @@ def test_ready_compiles_says_so_and_records_how_long_it_took(monkeypatch, tmp_pa
     release = threading.Event()
     notices = []
 
-    def first_call():
+    def prepare():
         release.wait()
         dispatcher(1)
 
@@ -93,7 +93,7 @@ def test_ready_compiles_says_so_and_records_how_long_it_took(monkeypatch, tmp_pa
         notices.append(text)
         release.set()
 
-    assert numba_cache.ready(dispatcher, first_call, notice=notice)
+    assert numba_cache.ready(dispatcher, prepare, notice=notice)
     assert len(notices) == 1 and notices[0].startswith("Compiling the kernel (first render only, about ")
     assert (tmp_path / numba_cache.COMPILE_SECONDS_FILE).exists()
     assert f"about {numba_cache.compile_seconds():.0f} s" in numba_cache.compiling_message()
@@ -113,26 +113,28 @@ def test_ready_returns_at_a_cancel_while_the_kernel_compiles(monkeypatch, tmp_pa
     release.set()
 
 
-def test_ready_raises_what_the_first_call_raised(monkeypatch, tmp_path):
+def test_ready_raises_what_the_prepare_raised(monkeypatch, tmp_path):
     dispatcher = kernel(tmp_path, monkeypatch)
 
-    def first_call():
+    def prepare():
         raise ValueError("bad scene")
 
     with pytest.raises(ValueError, match="bad scene"):
-        numba_cache.ready(dispatcher, first_call)
+        numba_cache.ready(dispatcher, prepare)
 
 
 def test_key_folders_unused_for_a_month_are_removed(monkeypatch, tmp_path):
     import os
     import time
 
-    old, recent = tmp_path / "kernels-old", tmp_path / "kernels-recent"
-    for folder in (old, recent):
+    old, recent, unmarked = tmp_path / "kernels-old", tmp_path / "kernels-recent", tmp_path / "kernels-unmarked"
+    for folder in (old, recent, unmarked):
         folder.mkdir()
-        (folder / "key.json").write_text("{}")
         (folder / "render_tile.nbi").write_text("")
+    for folder in (old, recent):
+        (folder / "key.json").write_text("{}")
     month_ago = time.time() - (numba_cache.UNUSED_DAYS + 1) * 86400
     os.utime(old / "key.json", (month_ago, month_ago))
     kernel(tmp_path, monkeypatch)
     assert not old.exists() and recent.exists() and numba_cache.kernel_folder(tmp_path).exists()
+    assert unmarked.exists()  # just made by another process, which has not written its key yet

@@ -133,9 +133,9 @@ def test_any_split_into_units_gives_the_same_film(backend):
 def test_the_first_render_says_when_the_kernel_compiles(monkeypatch):
     from addon.tracer.kernels import numba_cache
 
-    def slow_ready(dispatcher, first_call, cancel=None, notice=None):
+    def slow_ready(dispatcher, prepare, cancel=None, notice=None):
         notice(numba_cache.compiling_message())
-        first_call()
+        prepare()
         return True
 
     monkeypatch.setattr(numba_cache, "ready", slow_ready)

@@ -91,12 +91,13 @@ def _usable_folder() -> Path | None:
 
 
 def _remove_unused(root: Path, keep: Path) -> None:
-    """Delete key folders whose key.json was last written more than UNUSED_DAYS ago."""
+    """Delete key folders whose key.json (or, lacking one, the folder) was last written more than
+    UNUSED_DAYS ago."""
     cutoff = time.time() - UNUSED_DAYS * 86400
     for folder in root.glob("kernels-*"):
         stamp = folder / "key.json"
         try:
-            if folder != keep and (not stamp.exists() or stamp.stat().st_mtime < cutoff):
+            if folder != keep and (stamp if stamp.exists() else folder).stat().st_mtime < cutoff:
                 for item in folder.iterdir():
                     item.unlink(missing_ok=True)
                 folder.rmdir()
@@ -168,8 +169,8 @@ def compiling_message() -> str:
     return f"Compiling the kernel (first render only, about {compile_seconds():.0f} s)…"
 
 
-def ready(dispatcher, first_call, cancel=None, notice=None) -> bool:
-    """Run `first_call()`, which compiles `dispatcher` or loads it from the cache, in a helper thread while
+def ready(dispatcher, prepare, cancel=None, notice=None) -> bool:
+    """Run `prepare()`, which compiles `dispatcher` or loads it from the cache, in a helper thread while
     asking `cancel()`; if it takes longer than a cache load, tell `notice(compiling_message())`. Returns
     False when cancelled first (the compile goes on in the background and fills the cache)."""
     misses = sum(dispatcher.stats.cache_misses.values())
@@ -177,7 +178,7 @@ def ready(dispatcher, first_call, cancel=None, notice=None) -> bool:
 
     def run():
         try:
-            first_call()
+            prepare()
         except BaseException as error:  # noqa: BLE001 - raised again in the caller's thread
             failure.append(error)
 
