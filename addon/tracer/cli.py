@@ -20,11 +20,11 @@ EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 class ProgressBar:
-    """A one-line text progress bar on a stream (rewritten in place at most every `interval` seconds);
-    `notice(text)` writes a line above it."""
+    """A one-line text progress bar on a stream (default: sys.stderr when made), rewritten in place at most
+    every `interval` seconds; `notice(text)` writes a line above it."""
 
-    def __init__(self, stream=sys.stderr, width: int = 30, interval: float = 0.1):
-        self.stream, self.width, self.start = stream, width, time.perf_counter()
+    def __init__(self, stream=None, width: int = 30, interval: float = 0.1):
+        self.stream, self.width, self.start = stream or sys.stderr, width, time.perf_counter()
         self.interval, self.shown = interval, -interval
         self.time_left = TimeLeft()
 
