@@ -84,43 +84,50 @@ GROWTH = 4  # a unit has at most this many times the pixel-samples of the larges
 
 
 class Tiler:
-    """Cuts passes into tiles of about `seconds` of work each, sized from the throughput measured so far.
+    """Cuts passes into tiles of about `seconds` of work each, sized from the cost measured so far.
 
     Tiles are runs of whole rows (or part of one row when a row is more work than a unit), in reading
-    order. The cost per pixel-sample is tracked pessimistically (it rises at once and falls by halves),
-    since tiles differ: a tile sized on empty sky may land on a dense cloud."""
+    order. Rows differ (empty sky, dense cloud) but stay alike from pass to pass, so each row's cost per
+    pixel-sample is remembered from the last tile that covered it; rows not measured yet count at the
+    cost of all units so far, tracked pessimistically (it rises at once and falls by halves)."""
 
     def __init__(self, width: int, height: int, seconds: float = UNIT_SECONDS):
         self.width, self.height, self.seconds = width, height, seconds
-        self.cost = None  # seconds per pixel-sample
+        self.cost = None  # seconds per pixel-sample, all units so far
+        self.row_cost = np.full(height, np.nan)  # seconds per pixel-sample of each row, last measured
         self.largest = FIRST_UNIT // GROWTH  # pixel-samples of the largest unit measured
 
-    def measured(self, pixel_samples: int, seconds: float) -> None:
+    def measured(self, tile: tuple[int, int, int, int], samples: int, seconds: float) -> None:
+        _, y0, width, height = tile
+        pixel_samples = width * height * samples
         cost = seconds / pixel_samples
         self.cost = cost if self.cost is None or cost > self.cost else (self.cost + cost) / 2
+        self.row_cost[y0:y0 + height] = cost
         self.largest = max(self.largest, pixel_samples)
 
-    def _pixels(self, samples: int) -> int:
-        budget = self.largest * GROWTH
-        if self.cost is not None:
-            budget = min(budget, self.seconds / self.cost)
-        return max(1, int(budget // samples))
+    def _costs(self, y: int) -> np.ndarray:
+        """Cost per pixel-sample of rows y, y + 1, … (0 while nothing is measured: growth limits then)."""
+        costs = self.row_cost[y:]
+        return np.where(np.isnan(costs), self.cost or 0.0, costs)
 
     def tiles(self, samples: int) -> Iterator[tuple[int, int, int, int]]:
         """Tiles (x0, y0, width, height) covering the image once, for a pass of `samples` per pixel."""
         x, y = 0, 0
         while y < self.height:
-            pixels = self._pixels(samples)
-            if x == 0 and pixels >= self.width:
-                rows = min(pixels // self.width, self.height - y)
-                yield 0, y, self.width, rows
-                y += rows
-            else:
-                columns = min(pixels, self.width - x)
-                yield x, y, columns, 1
-                x += columns
-                if x == self.width:
-                    x, y = 0, y + 1
+            most = self.largest * GROWTH // samples  # pixels
+            if x == 0:
+                seconds = np.cumsum(self._costs(y)) * (self.width * samples)
+                rows = min(int(np.searchsorted(seconds, self.seconds, side="right")), most // self.width)
+                if rows > 0:
+                    yield 0, y, self.width, rows
+                    y += rows
+                    continue
+            cost = self._costs(y)[0] * samples
+            columns = max(1, min(most, self.width - x, int(self.seconds / cost) if cost > 0 else most))
+            yield x, y, columns, 1
+            x += columns
+            if x == self.width:
+                x, y = 0, y + 1
 
 
 @dataclass
@@ -161,10 +168,10 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
             break
         unit_start = time.perf_counter()
         sum_xyz, sum_sq = render_unit(bands[band], band, samples, tile, seed, backend)
-        pixel_samples = tile[2] * tile[3] * (samples[1] - samples[0])
-        tiler.measured(pixel_samples, time.perf_counter() - unit_start)
-        film.add(band, tile[1], tile[0], sum_xyz, sum_sq, samples[1] - samples[0])
-        done += pixel_samples
+        size = samples[1] - samples[0]
+        tiler.measured(tile, size, time.perf_counter() - unit_start)
+        film.add(band, tile[1], tile[0], sum_xyz, sum_sq, size)
+        done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, done / total)
     seconds = time.perf_counter() - start

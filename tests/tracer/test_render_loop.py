@@ -56,20 +56,41 @@ def test_tiles_cover_the_image_once_and_grow_from_a_small_first_unit(samples):
 
 def test_tiles_are_sized_from_the_measured_throughput():
     tiler = Tiler(200, 100, seconds=0.25)
-    tiler.measured(pixel_samples=10_000, seconds=0.1)  # 100 k pixel-samples per second
+    tiler.largest = 10**9  # growth is tested below
+    tiler.measured((0, 0, 200, 50), samples=1, seconds=0.1)  # 100 k pixel-samples per second
     coverage, sizes = tile_cover(tiler, 4, 200, 100)
     assert (coverage == 1).all()
     assert sizes[0] == 6200  # 25 k pixel-samples: whole rows of 200 pixels at 4 samples, rounded down
-    tiler.measured(pixel_samples=1_000, seconds=0.1)  # ten times slower: the next tiles shrink at once
+    tiler.measured((0, 0, 200, 5), samples=1, seconds=0.1)  # ten times slower: the next tiles shrink at once
     assert next(tiler.tiles(4))[2:] == (200, 3)
-    tiler.measured(pixel_samples=1_000, seconds=0.01)  # faster again: trusted by halves
-    assert tiler.cost == pytest.approx((1e-4 + 1e-5) / 2)
+    tiler.measured((0, 0, 10, 10), samples=1, seconds=0.0001)  # faster again: trusted by halves
+    assert tiler.cost == pytest.approx((1e-4 + 1e-6) / 2)
+
+
+def test_rows_measured_in_one_pass_size_the_tiles_of_the_next():
+    """Cheap rows (sky) then expensive ones (cloud): every tile of the next pass is predicted to take at
+    most the unit's time, and the cheap rows are not cut as finely as the expensive ones."""
+    width, height, seconds = 50, 100, 0.25
+    cost = np.where(np.arange(height) < 60, 1e-6, 1e-3)  # seconds per pixel-sample of each row
+    tiler = Tiler(width, height, seconds)
+    tiler.largest = 10**9
+    for row in range(height):
+        tiler.measured((0, row, width, 1), samples=1, seconds=cost[row] * width)
+    for samples in (1, 16):
+        tiles = list(tiler.tiles(samples))
+        coverage = np.zeros(height, dtype=int)
+        for x0, y0, w, h in tiles:
+            coverage[y0:y0 + h] += w
+            assert cost[y0:y0 + h].sum() * w * samples <= seconds + 1e-9
+        assert (coverage == width).all()
+    assert tiles[0] == (0, 0, width, 60)  # 16 samples: all the cheap rows in one tile (48 ms)…
+    assert {w for _, y0, w, _ in tiles[1:]} <= {15, 5}  # …then 15 of 50 pixels of a row per tile (0.24 s)
 
 
 def test_growth_of_tiles_is_bounded_while_the_throughput_is_unknown():
-    tiler = Tiler(100_000, 1)
-    tiler.measured(pixel_samples=1000, seconds=1e-9)  # absurdly fast (a timer's resolution)
-    tiler.measured(pixel_samples=10, seconds=1e-9)  # a pass's last, small tile does not hold growth back
+    tiler = Tiler(100_000, 2)
+    tiler.measured((0, 1, 1000, 1), samples=1, seconds=1e-9)  # absurdly fast (a timer's resolution)
+    tiler.measured((0, 1, 10, 1), samples=1, seconds=1e-9)  # a pass's last, small tile does not hold growth back
     assert next(tiler.tiles(1))[2] == 1000 * GROWTH
 
 
