@@ -76,7 +76,8 @@ def render_blend(args) -> str:
     else:
         warnings, how = export.warnings, "tracer"
         scheduler = settings.scheduler_address if args.scheduler is None else args.scheduler
-        result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=None if args.quiet else ProgressBar())
+        bar = None if args.quiet else ProgressBar()
+        result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=bar, notice=bar and bar.notice)
     for warning in warnings:
         print(f"warning: {warning}", file=sys.stderr)
     film = result.film

@@ -11,9 +11,12 @@ from .tracer.render import RenderResult
 from .tracer.scene import Scene
 
 
-def run(scene: Scene, scheduler: str = "", *, spp: int | None = None, progress=None, cancel=None) -> RenderResult:
+def run(scene: Scene, scheduler: str = "", *, spp: int | None = None, progress=None, cancel=None,
+        notice=None) -> RenderResult:
+    """`notice(text)` is told what a local render waits for before it starts (the kernel compiling); the
+    farm's workers compile their own kernels."""
     if not scheduler:
-        return local.render(scene, spp=spp, progress=progress, cancel=cancel)
+        return local.render(scene, spp=spp, progress=progress, cancel=cancel, notice=notice)
     from .tracer import distributed
 
     return distributed.render(scene, scheduler=scheduler, spp=spp, progress=progress, cancel=cancel)

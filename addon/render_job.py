@@ -15,6 +15,7 @@ class RenderJob:
     def __init__(self, scene: Scene, scheduler: str = ""):
         self.scene, self.scheduler = scene, scheduler
         self.fraction = 0.0
+        self.message = None  # what the render waits for before it starts (the kernel compiling), if anything
         self.result = None
         self.error = None
         self._cancel = threading.Event()
@@ -29,7 +30,8 @@ class RenderJob:
     def run(self) -> None:
         """Render in the calling thread (what the background thread runs)."""
         try:
-            self.result = dispatch.run(self.scene, self.scheduler, progress=self._progress, cancel=self._cancel.is_set)
+            self.result = dispatch.run(self.scene, self.scheduler, progress=self._progress, cancel=self._cancel.is_set,
+                                       notice=self._notice)
         except SpectralError as problem:
             self.error = str(problem)
         except Exception as problem:  # noqa: BLE001 - reported to the user instead of dying silently
@@ -37,6 +39,10 @@ class RenderJob:
 
     def _progress(self, _film, fraction: float) -> None:
         self.fraction = fraction
+        self.message = None
+
+    def _notice(self, text: str) -> None:
+        self.message = text
 
     def cancel(self) -> None:
         self._cancel.set()

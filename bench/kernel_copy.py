@@ -67,8 +67,7 @@ class CopyRenderer:
             self.module.render_tile(self.kernel_scene, 0, 0, width, height, self.next_sample,
                                     self.next_sample + size, self.seed, 0, sum_xyz, sum_sq)
             seconds += time.perf_counter() - start
-            film.add(0, 0, 0, sum_xyz, sum_sq)
-            film.count(0, size)
+            film.add(0, 0, 0, sum_xyz, sum_sq, size)
             self.next_sample += size
         return Image(film.xyz, film.variance, spp, seconds)
 

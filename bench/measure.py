@@ -141,8 +141,7 @@ def render_ours(kernel_scene: KernelScene, spp: int, seed: int = 0, first_sample
         start = time.perf_counter()
         sum_xyz, sum_sq = render_unit(kernel_scene, 0, (begin, begin + size), (0, 0, width, height), seed)
         seconds += time.perf_counter() - start
-        film.add(0, 0, 0, sum_xyz, sum_sq)
-        film.count(0, size)
+        film.add(0, 0, 0, sum_xyz, sum_sq, size)
         begin += size
     return Image(film.xyz, film.variance, spp, seconds)
 

@@ -33,6 +33,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     _timer = None
     _warnings = ()
     _warnings_shown = 0
+    _message = None
 
     def _start(self, context) -> RenderJob | EmulationJob | None:
         settings = context.scene.spectral
@@ -54,6 +55,12 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         for warning in self._warnings[self._warnings_shown:]:
             self.report({"WARNING"}, warning)
         self._warnings_shown = len(self._warnings)
+
+    def _show_message(self, context, message: str | None) -> None:
+        """Show what the render waits for (the kernel compiling) in the status bar; None restores it."""
+        if message != self._message:
+            context.workspace.status_text_set(message)
+            self._message = message
 
     def _finish(self, job: RenderJob) -> set:
         self._report_warnings()
@@ -97,10 +104,12 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             return {"PASS_THROUGH"}
         self._job.step()
         context.window_manager.progress_update(self._job.fraction)
+        self._show_message(context, getattr(self._job, "message", None))  # the emulation's job has none
         if self._job.running:
             return {"RUNNING_MODAL"}
         context.window_manager.event_timer_remove(self._timer)
         context.window_manager.progress_end()
+        self._show_message(context, None)
         return self._finish(self._job)
 
 

@@ -14,24 +14,36 @@ import time
 from pathlib import Path
 
 from .errors import SpectralError
+from .progress import TimeLeft
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 class ProgressBar:
-    """A one-line text progress bar on a stream (rewritten in place)."""
+    """A one-line text progress bar on a stream (default: sys.stderr when made), rewritten in place at most
+    every `interval` seconds; `notice(text)` writes a line above it."""
 
-    def __init__(self, stream=sys.stderr, width: int = 30):
-        self.stream, self.width, self.start = stream, width, time.perf_counter()
+    def __init__(self, stream=None, width: int = 30, interval: float = 0.1):
+        self.stream, self.width, self.start = stream or sys.stderr, width, time.perf_counter()
+        self.interval, self.shown = interval, -interval
+        self.time_left = TimeLeft()
 
     def __call__(self, _film, fraction: float) -> None:
-        filled = int(round(fraction * self.width))
         elapsed = time.perf_counter() - self.start
-        remaining = elapsed * (1 - fraction) / fraction if fraction > 0 else 0.0
+        remaining = self.time_left(fraction)
+        if elapsed - self.shown < self.interval and fraction < 1:
+            return
+        self.shown = elapsed
+        filled = int(round(fraction * self.width))
+        left = "" if remaining is None else f", ~{remaining:5.1f}s left"
         self.stream.write(f"\r[{'#' * filled}{'.' * (self.width - filled)}] {fraction:6.1%} "
-                          f"{elapsed:6.1f}s elapsed, ~{remaining:5.1f}s left")
+                          f"{elapsed:6.1f}s elapsed{left}")
         if fraction >= 1:
             self.stream.write("\n")
+        self.stream.flush()
+
+    def notice(self, text: str) -> None:
+        self.stream.write(f"{text}\n")
         self.stream.flush()
 
 
@@ -79,7 +91,7 @@ def _render(args) -> int:
                                     **{name: value for name, value in options.items() if value is not None})
     else:
         result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend, threads=args.threads,
-                        progress=progress)
+                        progress=progress, notice=progress and progress.notice)
     film = result.film
     image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
     if args.png:

@@ -53,6 +53,10 @@ class Unit:
     samples: tuple[int, int]
     tile: tuple[int, int, int, int]  # x0, y0, width, height
 
+    @property
+    def pixel_samples(self) -> int:
+        return self.tile[2] * self.tile[3] * (self.samples[1] - self.samples[0])
+
 
 def image_tiles(width: int, height: int, tile_size: int) -> list[tuple[int, int, int, int]]:
     """Tiles (x0, y0, width, height) covering the image row by row; edge tiles are smaller."""
@@ -101,8 +105,7 @@ class PassMerger:
             del self.waiting[(band, self.next_pass[band])]
             for tile_index in sorted(parts):
                 x0, y0, _, _ = self.tiles[tile_index]
-                self.film.add(band, y0, x0, *parts[tile_index])
-            self.film.count(band, self.sizes[self.next_pass[band]])
+                self.film.add(band, y0, x0, *parts[tile_index], self.sizes[self.next_pass[band]])
             self.next_pass[band] += 1
 
     @property
@@ -368,6 +371,7 @@ class RenderFarm:
             futures[future] = unit
         completed = as_completed(list(futures), loop=client.loop)
         done, cancelled = 0, False
+        work, work_done = sum(unit.pixel_samples for unit in units), 0
         last_check, alone_since = time.perf_counter(), None
         try:
             while done < len(units):
@@ -392,11 +396,13 @@ class RenderFarm:
                     raise SpectralError(f"collecting render results from {self.address} failed: "
                                         f"{type(problem).__name__}: {problem}") from problem
                 for future, (sum_xyz, sum_sq) in zip(batch, results):
-                    merger.add(futures.pop(future), sum_xyz, sum_sq)
+                    unit = futures.pop(future)
+                    merger.add(unit, sum_xyz, sum_sq)
+                    work_done += unit.pixel_samples
                     future.release()
                 done += len(batch)
                 if progress is not None:
-                    progress(film, done / len(units))
+                    progress(film, work_done / work)
         finally:
             completed.clear()
             if futures:

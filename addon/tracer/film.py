@@ -3,7 +3,8 @@
 Each band is an independent estimator of its part of the spectrum; the pixel's XYZ is the sum over
 bands of each band's sample mean, and its variance (of that estimate) the sum of the bands' variances
 of the mean. Accumulators merge by addition, so work split over passes, tiles or machines combines
-exactly (up to floating-point summation order).
+exactly (up to floating-point summation order). Samples are counted per pixel, so a film that holds
+part of a pass (some tiles done, others not) is still a consistent image.
 """
 
 import numpy as np
@@ -12,9 +13,9 @@ from . import colorimetry
 from .errors import SpectralError
 from .grids import available_memory
 
-# float64 Σ XYZ and Σ XYZ² per band, plus a tile's pair of accumulators and the XYZ, RGB and
-# variance images made at the end.
-ACCUMULATOR_BYTES = 2 * 3 * 8
+# float64 Σ XYZ and Σ XYZ² and an int64 sample count per band, plus a tile's accumulators and the XYZ,
+# RGB and variance images made at the end.
+ACCUMULATOR_BYTES = 2 * 3 * 8 + 8
 OUTPUT_BYTES = 3 * 3 * 8
 
 
@@ -38,32 +39,46 @@ class Film:
         self.width, self.height, self.bands = int(width), int(height), int(bands)
         self.sum_xyz = np.zeros((self.bands, self.height, self.width, 3))
         self.sum_sq = np.zeros_like(self.sum_xyz)
-        self.samples = np.zeros(self.bands, dtype=np.int64)
+        self.pixel_samples = np.zeros((self.bands, self.height, self.width), dtype=np.int64)
 
-    def add(self, band: int, y0: int, x0: int, sum_xyz: np.ndarray, sum_sq: np.ndarray) -> None:
-        """Add a tile's accumulators (rows y0…, columns x0…) for `band`."""
+    def add(self, band: int, y0: int, x0: int, sum_xyz: np.ndarray, sum_sq: np.ndarray, samples: int) -> None:
+        """Add a tile's accumulators (rows y0…, columns x0…) over `samples` samples per pixel of `band`."""
         h, w = sum_xyz.shape[:2]
         self.sum_xyz[band, y0:y0 + h, x0:x0 + w] += sum_xyz
         self.sum_sq[band, y0:y0 + h, x0:x0 + w] += sum_sq
+        self.pixel_samples[band, y0:y0 + h, x0:x0 + w] += samples
 
-    def count(self, band: int, samples: int) -> None:
-        """Record that `samples` more samples per pixel of `band` have been added (whole film)."""
-        self.samples[band] += samples
+    @property
+    def samples(self) -> np.ndarray:
+        """Samples per pixel that every pixel holds, per band (shape (bands,))."""
+        return self.pixel_samples.reshape(self.bands, -1).min(axis=1)
 
     @property
     def xyz(self) -> np.ndarray:
         """Estimated XYZ per pixel, shape (height, width, 3)."""
-        counts = np.maximum(self.samples, 1)[:, None, None, None]
+        counts = np.maximum(self.pixel_samples, 1)[..., None]
         return (self.sum_xyz / counts).sum(axis=0)
 
     @property
+    def mean_xyz(self) -> np.ndarray:
+        """Mean of `xyz` over the image, without forming `xyz` (quick at any size)."""
+        weights = 1.0 / np.maximum(self.pixel_samples, 1)
+        return np.einsum("bhwc,bhw->c", self.sum_xyz, weights) / (self.width * self.height)
+
+    @property
     def variance(self) -> np.ndarray:
-        """Variance of the XYZ estimate per pixel (sample variance / samples, summed over bands)."""
-        counts = self.samples[:, None, None, None].astype(np.float64)
-        safe = np.maximum(counts, 2)
-        mean = self.sum_xyz / np.maximum(counts, 1)
-        sample_variance = np.maximum(self.sum_sq / np.maximum(counts, 1) - mean**2, 0) * safe / (safe - 1)
-        return np.where(counts > 1, sample_variance / safe, 0.0).sum(axis=0)
+        """Variance of the XYZ estimate per pixel (sample variance / samples, summed over bands; 0 below two
+        samples). Formed in place: a 1920×1080 film's temporaries are 50 MB each."""
+        counts = self.pixel_samples[..., None].astype(np.float64)
+        divisor = np.maximum(counts, 1)
+        mean_squared = self.sum_xyz / divisor
+        mean_squared *= mean_squared
+        spread = self.sum_sq / divisor
+        spread -= mean_squared
+        np.maximum(spread, 0, out=spread)
+        spread /= np.maximum(counts - 1, 1)  # E[x²] − mean² is the biased variance: n/(n − 1) of it, over n
+        spread *= counts > 1
+        return spread.sum(axis=0)
 
     def rgb(self, space: str = "rec709") -> np.ndarray:
         """Linear RGB in `space` (default Rec.709, Blender's scene-linear)."""

@@ -1,11 +1,15 @@
-"""Renders a scene: splits the work into (band, sample range, tile) units, runs them on a backend,
-and accumulates them on a `Film`, with progress callbacks and cancellation between passes.
+"""Renders a scene: splits the work into units (a tile of one band's pass, about a quarter of a second of
+work each), runs them on a backend and adds them to a `Film`, with progress by samples done and
+cancellation between units.
 
 `render_unit` is the pure unit of work (also what distributed workers run): its result depends only on
-(scene, band, sample range, tile, seed), so any split of the work gives the same image.
+(scene, band, sample range, tile, seed), so any split of the work gives the same image. The passes
+(sample ranges) depend only on the sample count, and every pixel receives them in order, so the film's
+sums are formed exactly as by `distributed.render`, whatever the tiles.
 """
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,21 +49,85 @@ def band_scenes(scene: Scene, kernel_scene: KernelScene | None = None) -> list[K
 def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
                 seed: int, backend: str = "numba") -> tuple[np.ndarray, np.ndarray]:
     """Σ XYZ and Σ XYZ² over samples [begin, end) of each pixel in tile (x0, y0, width, height)."""
+    arguments = _tile_arguments(kernel_scene, band, samples, tile, seed)
+    backend_module(backend).render_tile(*arguments)
+    return arguments[-2:]
+
+
+def _tile_arguments(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
+                    seed: int) -> tuple:
+    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last two)."""
     x0, y0, width, height = tile
-    sum_xyz = np.zeros((height, width, 3))
-    sum_sq = np.zeros((height, width, 3))
-    backend_module(backend).render_tile(kernel_scene, x0, y0, width, height, samples[0], samples[1],
-                                        seed, band, sum_xyz, sum_sq)
-    return sum_xyz, sum_sq
+    return (kernel_scene, x0, y0, width, height, samples[0], samples[1], seed, band, np.zeros((height, width, 3)),
+            np.zeros((height, width, 3)))
+
+
+def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
+    """(first sample, samples) of each pass: sizes doubling from `first` up to `largest`, so the first
+    image comes quickly."""
+    begin, size = 0, first
+    while begin < spp:
+        count = min(size, spp - begin)
+        yield begin, count
+        begin += count
+        size = min(size * 2, largest)
 
 
 def pass_sizes(spp: int, first: int = 1, largest: int = 16) -> list[int]:
-    """Samples per pass: doubling from `first` up to `largest`, so the first image comes quickly."""
-    sizes, size = [], first
-    while sum(sizes) < spp:
-        sizes.append(min(size, spp - sum(sizes)))
-        size = min(size * 2, largest)
-    return sizes
+    """Samples per pass (see `passes`)."""
+    return [count for _, count in passes(spp, first, largest)]
+
+
+UNIT_SECONDS = 0.2  # aimed below the 0.25 s a unit may take, since tiles differ in cost
+FIRST_UNIT = 1024  # pixel-samples of the first unit, before any throughput is known
+GROWTH = 4  # a unit has at most this many times the pixel-samples of the largest one measured
+
+
+class Tiler:
+    """Cuts passes into tiles of about `seconds` of work each, sized from the cost measured so far.
+
+    Tiles are runs of whole rows (or part of one row when a row is more work than a unit), in reading
+    order. Rows differ (empty sky, dense cloud) but stay alike from pass to pass, so each row's cost per
+    pixel-sample is remembered from the last tile that covered it; rows not measured yet count at the
+    cost of all units so far, tracked pessimistically (it rises at once and falls by halves)."""
+
+    def __init__(self, width: int, height: int, seconds: float = UNIT_SECONDS):
+        self.width, self.height, self.seconds = width, height, seconds
+        self.cost = None  # seconds per pixel-sample, all units so far
+        self.row_cost = np.full(height, np.nan)  # seconds per pixel-sample of each row, last measured
+        self.largest = FIRST_UNIT // GROWTH  # pixel-samples of the largest unit measured
+
+    def measured(self, tile: tuple[int, int, int, int], samples: int, seconds: float) -> None:
+        _, y0, width, height = tile
+        pixel_samples = width * height * samples
+        cost = seconds / pixel_samples
+        self.cost = cost if self.cost is None or cost > self.cost else (self.cost + cost) / 2
+        self.row_cost[y0:y0 + height] = cost
+        self.largest = max(self.largest, pixel_samples)
+
+    def _costs(self, y: int) -> np.ndarray:
+        """Cost per pixel-sample of rows y, y + 1, … (0 while nothing is measured: growth limits then)."""
+        costs = self.row_cost[y:]
+        return np.where(np.isnan(costs), self.cost or 0.0, costs)
+
+    def tiles(self, samples: int) -> Iterator[tuple[int, int, int, int]]:
+        """Tiles (x0, y0, width, height) covering the image once, for a pass of `samples` per pixel."""
+        x, y = 0, 0
+        while y < self.height:
+            most = self.largest * GROWTH // samples  # pixels
+            if x == 0:
+                seconds = np.cumsum(self._costs(y)) * (self.width * samples)
+                rows = min(int(np.searchsorted(seconds, self.seconds, side="right")), most // self.width)
+                if rows > 0:
+                    yield 0, y, self.width, rows
+                    y += rows
+                    continue
+            cost = self._costs(y)[0] * samples
+            columns = max(1, min(most, self.width - x, int(self.seconds / cost) if cost > 0 else most))
+            yield x, y, columns, 1
+            x += columns
+            if x == self.width:
+                x, y = 0, y + 1
 
 
 @dataclass
@@ -71,9 +139,12 @@ class RenderResult:
 
 
 def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, backend: str | None = None,
-           threads: int | None = None, progress=None, cancel=None) -> RenderResult:
-    """Render `scene`. `progress(film, done_fraction)` is called after each pass; `cancel()` is asked
-    between passes and, when true, stops the render (the result says `cancelled`)."""
+           threads: int | None = None, progress=None, cancel=None, notice=None,
+           unit_seconds: float = UNIT_SECONDS) -> RenderResult:
+    """Render `scene`. `progress(film, fraction)` is called after each unit of work, with the fraction of
+    all samples done; `cancel()` is asked before each unit (and while the kernel compiles) and, when true,
+    stops the render (the result says `cancelled`; the film holds the units done). `notice(text)` is told
+    what the render waits for before it starts (the kernel compiling). Units take about `unit_seconds`."""
     settings = scene.settings
     spp = settings.spp if spp is None else int(spp)
     seed = settings.seed if seed is None else int(seed)
@@ -87,38 +158,55 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     bands = band_scenes(scene)
     camera = scene.camera
     film = Film(camera.width, camera.height, len(bands))
-    tile = (0, 0, camera.width, camera.height)
-    sizes = pass_sizes(spp)
-    total_units = len(sizes) * len(bands)
-    done_units = 0
-    begin = 0
-    cancelled = False
-    for size in sizes:
-        for band, kernel_scene in enumerate(bands):
-            if cancel is not None and cancel():
-                cancelled = True
-                break
-            sum_xyz, sum_sq = render_unit(kernel_scene, band, (begin, begin + size), tile, seed, backend)
-            film.add(band, 0, 0, sum_xyz, sum_sq)
-            film.count(band, size)
-            done_units += 1
-            if progress is not None:
-                progress(film, done_units / total_units)
-        if cancelled:
+    total = camera.width * camera.height * spp * len(bands)
+    done = 0
+    cancelled = backend == "numba" and not _kernel_ready(module, bands[0], seed, cancel, notice)
+    tiler = Tiler(camera.width, camera.height, unit_seconds)
+    for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler):
+        if cancel is not None and cancel():
+            cancelled = True
             break
-        begin += size
+        unit_start = time.perf_counter()
+        sum_xyz, sum_sq = render_unit(bands[band], band, samples, tile, seed, backend)
+        size = samples[1] - samples[0]
+        tiler.measured(tile, size, time.perf_counter() - unit_start)
+        film.add(band, tile[1], tile[0], sum_xyz, sum_sq, size)
+        done += tile[2] * tile[3] * size
+        if progress is not None:
+            progress(film, done / total)
     seconds = time.perf_counter() - start
     return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend))
 
 
+def _units(spp: int, bands: int, tiler: Tiler):
+    """(band, sample range, tile) of each unit: passes in order, each band's pass tile by tile."""
+    for begin, size in passes(spp):
+        for band in range(bands):
+            for tile in tiler.tiles(size):
+                yield band, (begin, begin + size), tile
+
+
+def _kernel_ready(module, kernel_scene: KernelScene, seed: int, cancel, notice) -> bool:
+    """Compile the Numba kernel for the scene's argument types (or load it from its cache), cancellably;
+    False if cancelled. Compiling without running leaves nothing to run in the background after a cancel
+    (Numba's workqueue threading layer aborts when two threads launch kernels at once)."""
+    import numba
+
+    from .kernels import numba_cache
+
+    arguments = _tile_arguments(kernel_scene, 0, (0, 1), (0, 0, 1, 1), seed)
+    signature = tuple(numba.typeof(argument) for argument in arguments)
+    return numba_cache.ready(module.render_tile, lambda: module.render_tile.compile(signature), cancel, notice)
+
+
 def render_stats(film: Film, seconds: float, backend: str) -> dict:
     """Timing, throughput and mean XYZ of a finished (or cancelled) render, for --stats and the UI."""
-    pixel_samples = int(film.samples.sum()) * film.width * film.height
+    pixel_samples = int(film.pixel_samples.sum())
     return {
         "seconds": seconds,
         "samples_per_pixel": int(film.samples.min()) if film.samples.size else 0,
         "pixel_samples_per_second": pixel_samples / seconds if seconds > 0 else 0.0,
-        "mean_xyz": film.xyz.reshape(-1, 3).mean(axis=0).tolist(),
+        "mean_xyz": film.mean_xyz.tolist(),
         "backend": backend,
         "bands": film.bands,
     }

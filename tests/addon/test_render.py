@@ -97,6 +97,42 @@ def test_job_reports_progress_from_its_thread(registered, tmp_path):
     assert job.succeeded and job.fraction == 1.0
 
 
+@pytest.fixture
+def compiling(monkeypatch):
+    """The kernel "compiles" on every render: it says so, then renders as usual."""
+    from addon.tracer.kernels import numba_cache
+
+    def ready(dispatcher, prepare, cancel=None, notice=None):
+        notice(numba_cache.compiling_message())
+        prepare()
+        return True
+
+    monkeypatch.setattr(numba_cache, "ready", ready)
+
+
+def test_job_says_when_the_kernel_compiles_until_rendering_starts(registered, tmp_path, compiling, monkeypatch):
+    basic_scene(tmp_path)
+    job = RenderJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
+    seen = []
+    monkeypatch.setattr(job, "_notice", lambda text: (RenderJob._notice(job, text), seen.append(job.message)))
+    job.run()
+    assert len(seen) == 1 and seen[0].startswith("Compiling the kernel (first render only, about ")
+    assert job.message is None and job.succeeded
+
+
+def test_f12_stats_say_when_the_kernel_compiles_then_count_samples(registered, tmp_path, compiling, monkeypatch):
+    from addon.engine import SpectralVolumeEngine
+
+    scene, _cloud = basic_scene(tmp_path)
+    scene.render.engine = "SPECTRAL_VOLUME"
+    lines = []
+    show = SpectralVolumeEngine._show_stats
+    monkeypatch.setattr(SpectralVolumeEngine, "_show_stats", lambda self, text: (lines.append(text), show(self, text)))
+    assert bpy.ops.render.render() == {"FINISHED"}
+    assert lines[0].startswith("Compiling the kernel (first render only, about ")
+    assert lines[-1].startswith(f"{scene.spectral.samples}/{scene.spectral.samples} samples")
+
+
 def test_cli_command_is_registered_and_removed(clean):
     import addon
 

@@ -129,8 +129,7 @@ def render_film(scene, backend, seed, spp=SPP) -> Film:
     film = Film(camera.width, camera.height, len(bands))
     for band, kernel_scene in enumerate(bands):
         sums = render_unit(kernel_scene, band, (0, spp), (0, 0, camera.width, camera.height), seed, backend)
-        film.add(band, 0, 0, *sums)
-        film.count(band, spp)
+        film.add(band, 0, 0, *sums, spp)
     return film
 
 

@@ -56,3 +56,35 @@ def test_bad_scene_exits_1_with_a_message_and_keeps_existing_output(write_scene,
 def test_missing_scene_file_is_reported(tmp_path):
     done = run_cli("render", tmp_path / "nowhere.json", "--out", tmp_path / "x.exr")
     assert done.returncode == 1 and "nowhere.json" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_the_cli_says_when_the_kernel_compiles(write_scene, tmp_path, monkeypatch, capsys):
+    from addon.tracer import cli
+    from addon.tracer.kernels import numba_cache
+
+    def compiling(dispatcher, prepare, cancel=None, notice=None):
+        notice(numba_cache.compiling_message())
+        prepare()
+        return True
+
+    monkeypatch.setattr(numba_cache, "ready", compiling)
+    assert cli.main(["render", str(write_scene()), "--out", str(tmp_path / "image.exr")]) == cli.EXIT_OK
+    assert "Compiling the kernel (first render only, about " in capsys.readouterr().err
+
+
+def test_the_progress_bar_estimates_the_time_left_from_the_samples_done_since_its_first_report(monkeypatch):
+    import io
+
+    from addon.tracer import cli
+
+    clock = iter([0.0, 100.0, 100.0, 100.01, 100.01, 101.0, 101.0])  # start, then elapsed and time left per report
+    monkeypatch.setattr(cli.time, "perf_counter", lambda: next(clock))
+    stream = io.StringIO()
+    bar = cli.ProgressBar(stream, interval=0.1)
+    bar(None, 0.1)  # after 100 s of compiling: no estimate yet
+    bar(None, 0.11)  # 10 ms later: not shown
+    bar(None, 0.2)  # 1 s for 10 %: 8 s left
+    lines = stream.getvalue().split("\r")
+    assert len(lines) == 3 and "left" not in lines[1] and lines[2].endswith("~  8.0s left")
+    bar.notice("a line of its own")
+    assert stream.getvalue().endswith("a line of its own\n")

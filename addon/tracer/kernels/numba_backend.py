@@ -28,10 +28,8 @@ from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sa
 from ..compile import MAX_WAVELENGTHS_PER_PATH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
 from ..planck import planck_radiance
 from ..sampling import pdf_binned, sample_binned
-from .numba_cache import discard_stale_cache
+from .numba_cache import cached
 from .rng import path_key, uniform
-
-discard_stale_cache()
 
 # Every kernel function divides as NumPy does (x/0 gives inf or nan, like the NumPy backend) instead of
 # Python's model, which checks every divisor for zero to raise ZeroDivisionError: the images are
@@ -700,7 +698,8 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, 
         xyz[2] += scale * _table(ks.xyz_weights[2], lam_cam[i])
 
 
-@jit(parallel=True, nogil=True, cache=True)
+@cached
+@jit(parallel=True, nogil=True)
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""

@@ -1,0 +1,140 @@
+"""The kernel cache: where it lives, what keys it, that a bad cache means a recompile, and getting the kernel
+ready while asking for cancellation. A tiny function stands in for the kernel (which takes minutes to
+compile)."""
+
+import pickle
+import threading
+
+import numba
+import pytest
+from numba import njit
+
+from addon.tracer.kernels import numba_cache
+
+
+def add_one(x):
+    return x + 1
+
+
+def kernel(root, monkeypatch):
+    """`add_one` as a freshly declared cached kernel, its cache under `root`."""
+    monkeypatch.setenv(numba_cache.CACHE_DIR_VARIABLE, str(root))
+    return numba_cache.cached(njit(add_one))
+
+
+def compiles(dispatcher) -> int:
+    return sum(dispatcher.stats.cache_misses.values())
+
+
+def test_the_cache_folder_is_per_user_and_can_be_overridden(monkeypatch, tmp_path):
+    monkeypatch.setenv(numba_cache.CACHE_DIR_VARIABLE, str(tmp_path / "mine"))
+    assert numba_cache.user_cache_root() == tmp_path / "mine"
+    monkeypatch.delenv(numba_cache.CACHE_DIR_VARIABLE)
+    monkeypatch.setattr("sys.platform", "linux")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert numba_cache.user_cache_root() == tmp_path / "xdg" / "spectral_volume"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    assert numba_cache.user_cache_root() == tmp_path / "home" / ".cache" / "spectral_volume"
+    monkeypatch.setattr("sys.platform", "darwin")
+    assert numba_cache.user_cache_root() == tmp_path / "home" / "Library" / "Caches" / "spectral_volume"
+    monkeypatch.setattr("sys.platform", "win32")
+    monkeypatch.setenv("LOCALAPPDATA", str(tmp_path / "local"))
+    assert numba_cache.user_cache_root() == tmp_path / "local" / "spectral_volume" / "Cache"
+
+
+def test_the_package_and_the_sources_key_the_folder(monkeypatch, tmp_path):
+    here = numba_cache.kernel_folder(tmp_path)
+    assert here.parent == tmp_path and here == numba_cache.kernel_folder(tmp_path)
+    monkeypatch.setattr(numba_cache, "PACKAGE", "bl_ext.user_default.spectral_volume.addon.tracer")
+    as_extension = numba_cache.kernel_folder(tmp_path)
+    monkeypatch.setattr(numba_cache, "sources_digest", lambda: "edited")
+    assert len({here, as_extension, numba_cache.kernel_folder(tmp_path)}) == 3
+
+
+def test_a_cached_kernel_is_loaded_by_the_next_process(monkeypatch, tmp_path):
+    first = kernel(tmp_path, monkeypatch)
+    assert first(1) == 2 and compiles(first) == 1
+    again = kernel(tmp_path, monkeypatch)  # as a new process would declare it
+    assert again(1) == 2 and compiles(again) == 0 and sum(again.stats.cache_hits.values()) == 1
+    assert str(numba_cache.kernel_folder(tmp_path)) == again.stats.cache_path
+
+
+def test_an_index_naming_a_missing_module_means_a_recompile(monkeypatch, tmp_path):
+    """As a cache written by the code imported as `addon` looks to the code imported as `bl_ext...`."""
+    kernel(tmp_path, monkeypatch)(1)
+    (index,) = numba_cache.kernel_folder(tmp_path).glob("*.nbi")
+    index.write_bytes(pickle.dumps(numba.__version__) + b"cno_such_module\nKernelScene\n.")
+    with pytest.raises(ModuleNotFoundError):
+        pickle.loads(index.read_bytes()[len(pickle.dumps(numba.__version__)):])
+    again = kernel(tmp_path, monkeypatch)
+    assert again(1) == 2 and compiles(again) == 1
+
+
+def test_an_unwritable_cache_folder_means_no_cache(monkeypatch, tmp_path):
+    blocker = tmp_path / "a file"
+    blocker.write_text("not a folder")
+    dispatcher = kernel(blocker, monkeypatch)
+    assert isinstance(dispatcher._cache, numba.core.caching.NullCache)
+    assert dispatcher(1) == 2
+
+
+def test_ready_compiles_says_so_and_records_how_long_it_took(monkeypatch, tmp_path):
+    dispatcher = kernel(tmp_path, monkeypatch)
+    monkeypatch.setattr(numba_cache, "NOTICE_AFTER_SECONDS", 0.0)
+    release = threading.Event()
+    notices = []
+
+    def prepare():
+        release.wait()
+        dispatcher(1)
+
+    def notice(text):
+        notices.append(text)
+        release.set()
+
+    assert numba_cache.ready(dispatcher, prepare, notice=notice)
+    assert len(notices) == 1 and notices[0].startswith("Compiling the kernel (first render only, about ")
+    assert (tmp_path / numba_cache.COMPILE_SECONDS_FILE).exists()
+    assert f"about {numba_cache.compile_seconds():.0f} s" in numba_cache.compiling_message()
+
+
+def test_ready_returns_at_a_cancel_while_the_kernel_compiles(monkeypatch, tmp_path):
+    dispatcher = kernel(tmp_path, monkeypatch)
+    release = threading.Event()
+    asked = []
+
+    def cancel():
+        asked.append(1)
+        return len(asked) >= 2
+
+    assert not numba_cache.ready(dispatcher, release.wait, cancel=cancel)
+    assert len(asked) == 2
+    release.set()
+
+
+def test_ready_raises_what_the_prepare_raised(monkeypatch, tmp_path):
+    dispatcher = kernel(tmp_path, monkeypatch)
+
+    def prepare():
+        raise ValueError("bad scene")
+
+    with pytest.raises(ValueError, match="bad scene"):
+        numba_cache.ready(dispatcher, prepare)
+
+
+def test_key_folders_unused_for_a_month_are_removed(monkeypatch, tmp_path):
+    import os
+    import time
+
+    old, recent, unmarked = tmp_path / "kernels-old", tmp_path / "kernels-recent", tmp_path / "kernels-unmarked"
+    for folder in (old, recent, unmarked):
+        folder.mkdir()
+        (folder / "render_tile.nbi").write_text("")
+    for folder in (old, recent):
+        (folder / "key.json").write_text("{}")
+    month_ago = time.time() - (numba_cache.UNUSED_DAYS + 1) * 86400
+    os.utime(old / "key.json", (month_ago, month_ago))
+    kernel(tmp_path, monkeypatch)
+    assert not old.exists() and recent.exists() and numba_cache.kernel_folder(tmp_path).exists()
+    assert unmarked.exists()  # just made by another process, which has not written its key yet
