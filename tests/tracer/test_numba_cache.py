@@ -52,6 +52,14 @@ def test_the_package_and_the_sources_key_the_folder(monkeypatch, tmp_path):
     assert len({here, as_extension, numba_cache.kernel_folder(tmp_path)}) == 3
 
 
+def test_the_cpu_compiled_for_keys_the_folder(monkeypatch, tmp_path):
+    """NUMBA_CPU_NAME (tools/cpu_variants.py) compiles for another CPU: its kernels go to another folder."""
+    host = numba_cache.kernel_folder(tmp_path)
+    monkeypatch.setattr(numba.config, "CPU_NAME", "generic")
+    monkeypatch.setattr(numba.config, "CPU_FEATURES", "")
+    assert numba_cache.cache_key()["cpu"] == "generic" and numba_cache.kernel_folder(tmp_path) != host
+
+
 def test_a_cached_kernel_is_loaded_by_the_next_process(monkeypatch, tmp_path):
     first = kernel(tmp_path, monkeypatch)
     assert first(1) == 2 and compiles(first) == 1

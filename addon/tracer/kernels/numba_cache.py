@@ -66,9 +66,12 @@ def cache_key() -> dict:
         features = binding.get_host_cpu_features().flatten()
     except RuntimeError:  # LLVM cannot list them on this platform: the CPU's name has to do
         features = ""
+    # The CPU the kernels are compiled for: the host's, unless NUMBA_CPU_NAME / NUMBA_CPU_FEATURES say
+    # otherwise (tools/cpu_variants.py compiles for other CPUs).
+    cpu = numba.config.CPU_NAME or binding.get_host_cpu_name()
+    features = numba.config.CPU_FEATURES if numba.config.CPU_FEATURES is not None else features
     return {"sources": sources_digest(), "package": PACKAGE, "python": sys.implementation.cache_tag,
-            "numba": numba.__version__, "llvmlite": llvmlite.__version__, "cpu": binding.get_host_cpu_name(),
-            "cpu_features": features}
+            "numba": numba.__version__, "llvmlite": llvmlite.__version__, "cpu": cpu, "cpu_features": features}
 
 
 def kernel_folder(root: Path | None = None, key: dict | None = None) -> Path:
