@@ -7,19 +7,30 @@ from ..tracer.scene import BlackbodyEmission, Fluorescence, Grid, Medium
 from .spectra import to_spectrum
 
 
-def spectral_material(obj):
-    """The first material of `obj` with Spectral Volume enabled, or None. Settings are read from the
-    original (not the evaluated) data: Python property edits do not tag evaluated copies for update."""
-    for slot in obj.material_slots:
-        if slot.material is not None and slot.material.original.spectral.enabled:
-            return slot.material.original
-    return None
+def materials(obj, depsgraph=None) -> list:
+    """The materials of an object's slots, evaluated in `depsgraph` when given. A slot its evaluated
+    geometry leaves empty (a Geometry Nodes volume without Set Material) falls back to the object's own
+    slot, as Blender's renderers do."""
+    own = obj.original.material_slots
+    found = []
+    for index, slot in enumerate(obj.material_slots):
+        material = slot.material
+        if material is None and index < len(own):
+            material = own[index].material
+        if material is not None:
+            found.append(material if depsgraph is None else material.evaluated_get(depsgraph))
+    return found
 
 
-def require_material(obj):
-    material = spectral_material(obj)
+def spectral_material(obj, depsgraph=None):
+    """The first material of `obj` with Spectral Volume enabled (evaluated in `depsgraph` when given), or None."""
+    return next((material for material in materials(obj, depsgraph) if material.spectral.enabled), None)
+
+
+def require_material(obj, depsgraph):
+    material = spectral_material(obj, depsgraph)
     if material is None:
-        names = [slot.material.name for slot in obj.material_slots if slot.material is not None]
+        names = [material.name for material in materials(obj, depsgraph)]
         found = f"its materials ({', '.join(names)}) are not spectral" if names else "it has no material"
         raise SpectralError(f"object {obj.name!r} is a volume but {found}: add a material and enable "
                             "Spectral Volume in it (Material Properties or the Spectral sidebar tab)")

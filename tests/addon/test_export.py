@@ -12,7 +12,7 @@ from addon.tracer import grids, spectra
 from addon.tracer.errors import SpectralError
 from addon.tracer.scene import Grid
 from addon.tracer.scene_io import load_scene
-from tests.addon.builders import (PATTERN, add_camera, add_fluid_domain, add_sun, basic_scene, link,
+from tests.addon.builders import (PATTERN, add_camera, add_fluid_domain, add_sun, basic_scene, geometry_nodes, link,
                                   spectral_material, vdb_index_to_world, write_vdb)
 
 bpy = pytest.importorskip("bpy")
@@ -98,6 +98,46 @@ def test_evaluated_volume_with_mesh_to_volume_modifier(registered, tmp_path):
     world = (grid.index_to_world @ np.c_[centres, np.ones(len(centres))].T).T[:, :3]
     np.testing.assert_allclose(world.min(axis=0), [0.0, -0.5, -0.25], atol=0.16)  # the cube, in world space
     np.testing.assert_allclose(world.max(axis=0), [1.0, 0.5, 0.75], atol=0.16)
+
+
+def test_geometry_nodes_mesh_to_volume_is_an_instance_at_its_matrix(registered):
+    add_camera()
+    add_sun()
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(2.0, 0.0, 0.5))
+    cube = bpy.context.active_object
+    cube.data.materials.append(spectral_material())
+    node = geometry_nodes(cube, "GeometryNodeMeshToVolume")
+    node.inputs["Resolution Mode"].default_value = "Size"
+    node.inputs["Voxel Size"].default_value = 0.1
+    (medium,) = _export().scene.media  # the volume only: the nodes leave the mesh empty
+    assert medium.name == "Cube"
+    centres = np.argwhere(medium.density.values >= 0.5)
+    world = (medium.density.index_to_world @ np.c_[centres, np.ones(len(centres))].T).T[:, :3]
+    np.testing.assert_allclose(world.min(axis=0), [1.5, -0.5, 0.0], atol=0.16)  # the cube, in world space
+    np.testing.assert_allclose(world.max(axis=0), [2.5, 0.5, 1.0], atol=0.16)
+
+
+def test_instanced_volumes_each_at_their_instance_matrix(registered, tmp_path):
+    _scene, cloud = basic_scene(tmp_path)
+    cloud.location = (0.0, 0.0, 1.0)
+    group = bpy.data.collections.new("Clouds")
+    group.objects.link(cloud)
+    bpy.context.scene.collection.objects.unlink(cloud)
+    for x in (-2.0, 3.0):
+        holder = link(bpy.data.objects.new(f"Holder {x}", None))
+        holder.instance_type, holder.instance_collection, holder.location = "COLLECTION", group, (x, 0.0, 0.0)
+    media = _export().scene.media
+    assert len(media) == 2
+    origins = sorted(medium.density.index_to_world[0, 3] for medium in media)
+    np.testing.assert_allclose(origins, [-2.0 + vdb_index_to_world()[0, 3], 3.0 + vdb_index_to_world()[0, 3]])
+
+
+def test_geometry_nodes_volume_uses_the_object_material_slot(registered, tmp_path):
+    _scene, cloud = basic_scene(tmp_path)
+    geometry_nodes(cloud, "GeometryNodeVolumeCube")  # a new volume: its output has no material
+    (medium,) = _export().scene.media
+    assert medium.density_scale == 4.0  # the material of the object's slot
+    assert medium.density.values.max() == pytest.approx(1.0)  # the cube's density, not the file's
 
 
 def test_mesh_with_spectral_material_is_voxelised(registered):
