@@ -47,10 +47,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             return
         for warning in export.warnings:
             self.report({"WARNING"}, warning)
-        camera = export.scene.camera
-        if (camera.width, camera.height) != (self.resolution_x, self.resolution_y):
-            self.report({"ERROR"}, "render region (border) and crop are not supported: turn Render Region off")
-            return
+        camera = export.scene.camera  # with Render Region on, it sees the region: Blender crops or places it
         result = self.begin_result(0, 0, camera.width, camera.height)
         spp = export.scene.settings.spp
 

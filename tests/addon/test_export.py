@@ -9,6 +9,7 @@ from addon.export import camera as camera_export
 from addon.export.lights import point_intensity
 from addon.export.scene import export_scene
 from addon.tracer import grids, spectra
+from addon.tracer.compile import camera_extent
 from addon.tracer.errors import SpectralError
 from addon.tracer.scene import Grid
 from addon.tracer.scene_io import load_scene
@@ -223,6 +224,55 @@ def test_camera_conventions(registered):
     data.type = "PANO"
     with pytest.raises(SpectralError, match="panoramic cameras are not supported|pano cameras are not supported"):
         camera_export.export_camera(scene)
+
+
+def _film_point(camera, px, py):
+    """Camera-space film position (at z = -1 for perspective) of pixel corner (px, py), counted from the
+    lower left."""
+    extent_x, extent_y, offset_x, offset_y = camera_extent(camera)
+    return np.array([(px / camera.width - 0.5) * extent_x + offset_x, (py / camera.height - 0.5) * extent_y + offset_y])
+
+
+CAMERA_CASES = [(kind, fit, size) for kind in ("PERSP", "ORTHO") for fit in ("AUTO", "HORIZONTAL", "VERTICAL")
+                for size in ((40, 30), (30, 40))]
+
+
+@pytest.mark.parametrize("kind, fit, size", CAMERA_CASES)
+def test_camera_frame_matches_blender_view_frame(registered, kind, fit, size):
+    scene = bpy.context.scene
+    data = add_camera().data
+    data.type, data.sensor_fit, data.lens, data.ortho_scale = kind, fit, 35.0, 5.0
+    data.sensor_width, data.sensor_height, data.shift_x, data.shift_y = 36.0, 20.0, 0.1, -0.05
+    scene.render.resolution_x, scene.render.resolution_y = size
+    exported = camera_export.export_camera(scene)
+    corners = np.array([corner[:] for corner in data.view_frame(scene=scene)])
+    if kind == "PERSP":
+        corners = corners[:, :2] / -corners[:, 2:]
+    low, high = _film_point(exported, 0, 0), _film_point(exported, exported.width, exported.height)
+    np.testing.assert_allclose(corners[:, :2].min(axis=0), low, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(corners[:, :2].max(axis=0), high, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("kind, fit, size", CAMERA_CASES)
+def test_render_region_camera_sees_the_region_of_the_frame(registered, kind, fit, size):
+    scene = bpy.context.scene
+    data = add_camera().data
+    data.type, data.sensor_fit, data.shift_x, data.shift_y = kind, fit, 0.1, -0.05
+    render = scene.render
+    render.resolution_x, render.resolution_y = size
+    full = camera_export.export_camera(scene)
+    render.use_border = True
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.33, 0.77, 0.1, 0.55
+    region = camera_export.render_region(scene)
+    width, height = size
+    assert (region.x, region.y) == (int(np.float32(0.33) * width), int(np.float32(0.1) * height))
+    assert (region.x + region.width, region.y + region.height) == (int(np.float32(0.77) * width),
+                                                                    int(np.float32(0.55) * height))
+    part = camera_export.export_camera(scene)
+    assert (part.width, part.height) == (region.width, region.height)
+    np.testing.assert_allclose(_film_point(part, 0, 0), _film_point(full, region.x, region.y), atol=1e-9)
+    np.testing.assert_allclose(_film_point(part, part.width, part.height),
+                               _film_point(full, region.x + region.width, region.y + region.height), atol=1e-9)
 
 
 def test_lights_and_world(registered, tmp_path):
