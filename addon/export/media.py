@@ -48,8 +48,11 @@ def albedo_table(settings) -> tuple[np.ndarray, np.ndarray]:
     return densities, np.stack([to_spectrum(spectrum).values for _density, spectrum in levels])
 
 
-def export_medium(name: str, material, density: Grid, temperature: Grid | None) -> Medium:
-    """The medium of `material` over `density`; `temperature` is required when blackbody emission is on."""
+def export_medium(name: str, material, density: Grid, temperature: Grid | None, metres_per_unit: float = 1.0) -> Medium:
+    """The medium of `material` over `density`; `temperature` is required when blackbody emission is on.
+    The material's coefficients are per metre; the tracer's lengths are Blender units of `metres_per_unit`
+    metres (the scene's Unit Scale), so the density scale (which scales absorption, scattering,
+    fluorescence and glow alike) takes that factor."""
     settings = material.spectral
     densities, table = albedo_table(settings)
     fluorescence = None
@@ -64,7 +67,7 @@ def export_medium(name: str, material, density: Grid, temperature: Grid | None) 
         emission = BlackbodyEmission(temperature=temperature, intensity=settings.blackbody_intensity,
                                      temperature_scale=settings.temperature_scale,
                                      temperature_offset=settings.temperature_offset)
-    return Medium(name=name, density=density, density_scale=settings.density_scale,
+    return Medium(name=name, density=density, density_scale=settings.density_scale * metres_per_unit,
                   extinction=to_spectrum(settings.extinction), albedo_densities=densities, albedo_table=table,
                   anisotropy=to_spectrum(settings.anisotropy), phase=settings.phase, fluorescence=fluorescence,
                   emission=emission)

@@ -6,6 +6,8 @@ Which objects become what:
 - Meshes with a fluid domain modifier (smoke/fire): the domain's OpenVDB cache, same materials rule.
 - Other meshes whose material has Spectral Volume enabled: voxelised at the object's Voxel Size.
 - Sun, point and spot lights; the World (when its Spectral World is on); the scene camera.
+Materials are per metre, so the scene's Unit Scale scales them (addon.export.media). Motion blur and
+non-square pixels cannot be rendered: each gives one warning.
 Everything is read from the evaluated depsgraph, so animation and drivers are those of its frame (a
 render's own depsgraph never writes them back to the original data), and the instances it lists count:
 Geometry Nodes volumes (Mesh to Volume, Volume Cube, ...) and instanced collections, each at its
@@ -53,9 +55,21 @@ def render_settings(scene) -> RenderSettings:
                           backend=s.backend)
 
 
+def unsupported_settings(scene) -> list[str]:
+    """Warnings for the scene's render settings the tracer cannot follow."""
+    render, warnings = scene.render, []
+    if render.use_motion_blur:
+        warnings.append("motion blur is not supported: rendered without it (Render Properties ▸ Motion Blur)")
+    if render.pixel_aspect_x != render.pixel_aspect_y:
+        warnings.append(f"pixel aspect {render.pixel_aspect_x:g}:{render.pixel_aspect_y:g} is not supported: "
+                        "rendered with square pixels (Output Properties ▸ Format ▸ Aspect)")
+    return warnings
+
+
 def _medium(instance, depsgraph, volume_owners):
     """The medium of one depsgraph instance, or None when it is not a volume."""
     obj, matrix = instance.object, instance.matrix_world
+    metres_per_unit = depsgraph.scene_eval.unit_settings.scale_length
     if obj.type == "VOLUME" or (obj.type == "MESH" and fluid_domain(obj) is not None):
         material = require_material(obj, depsgraph)
         names = [obj.original.spectral.density_grid]
@@ -63,12 +77,13 @@ def _medium(instance, depsgraph, volume_owners):
             names.append(material.spectral.temperature_grid)
         read = volume_grids if obj.type == "VOLUME" else fluid_grids
         grids = read(obj, depsgraph, names, matrix)
-        return export_medium(obj.name, material, grids[0], grids[1] if len(grids) > 1 else None)
+        return export_medium(obj.name, material, grids[0], grids[1] if len(grids) > 1 else None, metres_per_unit)
     if obj.type == "MESH":
         material = spectral_material(obj, depsgraph)
         if material is None or (obj.original in volume_owners and not obj.data.polygons):
             return None  # Geometry Nodes turned the mesh into a volume: only that volume renders
-        return export_medium(obj.name, material, voxelise(obj, obj.original.spectral.voxel_size, matrix), None)
+        return export_medium(obj.name, material, voxelise(obj, obj.original.spectral.voxel_size, matrix), None,
+                             metres_per_unit)
     return None
 
 
@@ -87,7 +102,7 @@ def export_scene(depsgraph) -> Export:
     """Export the depsgraph's scene at its current frame. Raises SpectralError on bad input."""
     _synchronise(depsgraph)
     scene = depsgraph.scene_eval
-    warnings = []
+    warnings = unsupported_settings(scene)
     camera = export_camera(scene, scene.camera.evaluated_get(depsgraph) if scene.camera else None)
     media, lights = [], []
     volume_owners = {instance.object.original for instance in depsgraph.object_instances

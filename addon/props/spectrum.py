@@ -114,11 +114,12 @@ class SpectralAlbedoSpectrum(SpectrumFields, bpy.types.PropertyGroup):
 
 
 class SpectralExtinctionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
-    """Extinction per unit density over wavelength (multiplied by the density scale)."""
+    """Extinction per unit density and metre over wavelength (multiplied by the density scale; the scene's
+    Unit Scale says how many metres a Blender unit is)."""
 
     ROLE = "absorption"
     source: _source(("CONSTANT", "CURVE", "CSV"), "CONSTANT")
-    value: bpy.props.FloatProperty(name="Extinction", description="Extinction per unit density",
+    value: bpy.props.FloatProperty(name="Extinction", description="Extinction per unit density and metre",
                                    default=1.0, min=0.0, soft_max=10.0)
 
 
@@ -138,7 +139,7 @@ class SpectralExcitationSpectrum(SpectrumFields, bpy.types.PropertyGroup):
 
     ROLE = "absorption"
     source: _source(("BAND", "GAUSSIAN", "CURVE", "CSV"), "BAND")
-    value: bpy.props.FloatProperty(name="Strength", description="Absorption at the band's peak, per unit density",
+    value: bpy.props.FloatProperty(name="Strength", description="Absorption at the band's peak, per unit density and metre",
                                    default=1.0, min=0.0, soft_max=10.0)
 
 

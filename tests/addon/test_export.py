@@ -275,6 +275,24 @@ def test_render_region_camera_sees_the_region_of_the_frame(registered, kind, fit
                                _film_point(full, region.x + region.width, region.y + region.height), atol=1e-9)
 
 
+def test_unit_scale_makes_materials_per_metre(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    assert _export().scene.media[0].density_scale == pytest.approx(4.0)
+    scene.unit_settings.scale_length = 0.01  # a Blender unit is a centimetre: 1/100 of the optical depth
+    assert _export().scene.media[0].density_scale == pytest.approx(0.04)
+
+
+def test_settings_the_tracer_cannot_follow_are_warned(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    assert _export().warnings == []
+    scene.render.use_motion_blur = True
+    scene.render.pixel_aspect_x = 2.0
+    warnings = _export().warnings
+    assert len(warnings) == 2
+    assert warnings[0].startswith("motion blur is not supported")
+    assert warnings[1].startswith("pixel aspect 2:1 is not supported: rendered with square pixels")
+
+
 def test_lights_and_world(registered, tmp_path):
     basic_scene(tmp_path)
     sun = bpy.data.objects["Sun"]
