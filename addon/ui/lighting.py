@@ -9,11 +9,22 @@ SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT")
 
 
 def draw_light(layout, light) -> None:
+    """Brightness and size (the sun's Angle softens its shadows; the tracer's point and spot lights are
+    points, so their Radius is greyed out and says why), then the spectrum."""
     if light.type not in SUPPORTED_LIGHTS:
         layout.label(text=f"{light.type.title()} lights are not rendered spectrally (sun, point, spot are)",
                      icon="ERROR")
         return
-    layout.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
+    column = layout.column()
+    column.use_property_split = True
+    column.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
+    if light.type == "SUN":
+        column.prop(light, "angle")
+    else:
+        radius = column.column()
+        radius.active = False
+        radius.prop(light, "shadow_soft_size", text="Radius")
+        radius.label(text="The tracer renders a point: only the Cycles emulation uses the Radius", icon="INFO")
     draw_spectrum(layout, light.spectral.spectrum, "Spectrum", presets=True)
 
 

@@ -41,6 +41,7 @@ class RecordingLayout:
 
     def __setattr__(self, name, value):
         assert name in SETTABLE, f"UILayout has no settable attribute {name!r}"
+        self.calls.append(("set", (name, value), {}))
 
     def __getattr__(self, name):
         assert name in bpy.types.UILayout.bl_rna.functions or name in CONTAINERS, f"UILayout has no {name}()"
@@ -65,6 +66,16 @@ class RecordingLayout:
             _check_property(args[2], args[3])
             _check_property(args[4], args[5])
         return None
+
+    def setting_before(self, index, name):
+        """The last value `name` was set to before call `index` (None: never)."""
+        values = [args[1] for kind, args, _kwargs in self.calls[:index] if kind == "set" and args[0] == name]
+        return values[-1] if values else None
+
+    def index(self, kind, data, name):
+        """Index of the first `kind` call (prop, ...) on `data`'s property `name`."""
+        return next(i for i, (call, args, _kwargs) in enumerate(self.calls)
+                    if call == kind and args[:2] == (data, name))
 
     def texts(self, kind="label"):
         return [kwargs.get("text", "") for name, _args, kwargs in self.calls if name == kind]

@@ -102,6 +102,17 @@ def test_light_spectrum_shows_presets_and_swatch(registered):
     assert any("not rendered spectrally" in text for text in layout.texts())
 
 
+def test_light_size_is_drawn_sun_angle_and_greyed_radius(registered):
+    scene, _volume, _material, lights = _scene_with_everything()
+    sun, point, spot = (obj.data for obj in lights[:3])
+    layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, lights[0]))
+    assert layout.setting_before(layout.index("prop", sun, "angle"), "active") in (None, True)
+    for obj, light in ((lights[1], point), (lights[2], spot)):
+        layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, obj))
+        assert layout.setting_before(layout.index("prop", light, "shadow_soft_size"), "active") is False
+        assert any("only the Cycles emulation uses the Radius" in text for text in layout.texts())
+
+
 def test_menus_and_ui_list_draw(registered):
     scene, volume, material, lights = _scene_with_everything()
     context = SimpleNamespace(spectral_spectrum=lights[0].data.spectral.spectrum)
