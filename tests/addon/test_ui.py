@@ -140,6 +140,15 @@ def test_material_preset_sets_everything_and_resets_the_rest(registered):
     assert curves.points(curves.find_mapping(settings.extinction.curve))[0] == pytest.approx((360.0, 1.0))
 
 
+def test_light_preset_keeps_the_wavelength_window(registered):
+    spectrum = bpy.data.lights.new("UV Lamp", "SPOT").spectral.spectrum
+    spectrum.use_window, spectrum.window_min, spectrum.window_max = True, 275.0, 450.0
+    spectrum.source = "BLACKBODY"
+    presets.apply(spectrum, presets.LIGHT_PRESETS["TUNGSTEN"][1])
+    assert (spectrum.source, spectrum.illuminant, spectrum.temperature) == ("ILLUMINANT", "A", 5500.0)
+    assert spectrum.use_window and (spectrum.window_min, spectrum.window_max) == (275.0, 450.0)
+
+
 def _target(settings):
     owner = settings.id_data
     return {"id_type": owner.id_type, "id_name": owner.name, "data_path": settings.path_from_id()}
