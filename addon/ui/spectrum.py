@@ -1,9 +1,8 @@
 """Drawing one spectrum setting: source, its parameters, curve widget, swatch and problems."""
 
 from .. import curves
-from ..export.spectra import to_spectrum
+from ..export.spectra import problem
 from ..operators.targets import point_at
-from ..tracer.errors import SpectralError
 
 LIGHT_PRESETS_MENU = "SPECTRAL_MT_light_presets"
 
@@ -29,10 +28,9 @@ def draw_spectrum(layout, settings, text: str, presets: bool = False) -> None:
         sub.active = settings.use_window
         sub.prop(settings, "window_min")
         sub.prop(settings, "window_max")
-    try:
-        to_spectrum(settings)
-    except SpectralError as problem:
-        column.label(text=str(problem), icon="ERROR")
+    message = problem(settings)
+    if message is not None:
+        column.label(text=message, icon="ERROR")
 
 
 def _draw_source(column, settings) -> None:

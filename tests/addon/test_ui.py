@@ -1,10 +1,13 @@
 """Panels, menus and UI lists draw against real data; presets and spectrum operators work."""
 
+import os
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from addon import curves, presets, registration
+from addon.export.spectra import to_spectrum
 from addon.props.render import ENGINE_ID
 from addon.tracer.errors import SpectralError
 
@@ -222,3 +225,66 @@ def test_copied_material_can_make_its_curves_its_own(registered):
     assert copy.spectral.curve_group != material.spectral.curve_group and not curves.is_shared(material)
     curves.set_points(curves.find_mapping(copy.spectral.albedo.curve), (400, 700), (0.1, 0.2))
     assert curves.points(curves.find_mapping(material.spectral.albedo.curve))[0][1] == pytest.approx(0.9)
+
+
+def _counting(monkeypatch, module, name):
+    """Replace `module.name` by a wrapper that counts its calls; the list of calls."""
+    calls, original = [], getattr(module, name)
+
+    def wrapper(*args, **kwargs):
+        calls.append(args)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, wrapper)
+    return calls
+
+
+def _draw_light(scene, light_object):
+    return draw(bpy.types.SPECTRAL_PT_light, _context(scene, light_object))
+
+
+def test_redraws_reuse_spectra_by_content(registered, tmp_path, monkeypatch):
+    from addon.tracer import spectra
+
+    scene, _volume, _material, lights = _scene_with_everything()
+    spectrum = lights[0].data.spectral.spectrum
+    csv = tmp_path / "lamp.csv"
+    csv.write_text("".join(f"{nm},{1 + nm / 1000}\n" for nm in range(300, 800)))
+    spectrum.source, spectrum.filepath = "CSV", str(csv)
+    reads = _counting(monkeypatch, spectra, "from_csv")
+    for _redraw in range(3):
+        _draw_light(scene, lights[0])
+    assert len(reads) == 1
+    os.utime(csv, ns=(csv.stat().st_atime_ns, csv.stat().st_mtime_ns + 10**9))  # the file changed
+    _draw_light(scene, lights[0])
+    assert len(reads) == 2
+    samples = _counting(monkeypatch, curves, "sample")
+    spectrum.source = "CURVE"
+    for _redraw in range(3):
+        _draw_light(scene, lights[0])
+    assert len(samples) == 1
+    curves.find_mapping(spectrum.curve).curves[0].points[0].location = (3.0, 0.2)
+    _draw_light(scene, lights[0])
+    assert len(samples) == 2
+
+
+def test_redraws_never_recover_spectra_from_colours(registered, monkeypatch):
+    from addon.tracer import spectra
+
+    def refuse(*_args, **_kwargs):
+        raise AssertionError("RGB → spectrum recovery while drawing")
+
+    scene, volume, material, lights = _scene_with_everything()
+    lights[0].data.spectral.spectrum.source = material.spectral.albedo.source = "COLOR"
+    lights[0].data.spectral.spectrum.color = material.spectral.albedo.color = (0.8, 0.2, 0.1)
+    monkeypatch.setattr(spectra, "from_rgb", refuse)
+    _draw_light(scene, lights[0])
+    for panel in _classes(bpy.types.Panel):
+        context = _context(scene, volume, material)
+        if not hasattr(panel, "poll") or panel.poll(context):
+            draw(panel, context)
+    np.testing.assert_allclose(material.spectral.albedo.preview, (0.8, 0.2, 0.1), atol=1e-6)
+    np.testing.assert_allclose(lights[0].data.spectral.spectrum.preview, (1.0, 0.25, 0.125), atol=1e-6)
+    monkeypatch.undo()  # once computed (by a render), the swatch is the spectrum's own colour
+    to_spectrum(material.spectral.albedo)
+    np.testing.assert_allclose(material.spectral.albedo.preview, (0.8, 0.2, 0.1), atol=0.02)
