@@ -36,6 +36,11 @@ def _value(value):
     return tuple(value) if hasattr(value, "__len__") and not isinstance(value, str) else value
 
 
+def csv_path(settings) -> str:
+    """The absolute path of a setting's CSV file ("//" is the folder of the .blend file it lives in)."""
+    return bpy.path.abspath(settings.filepath, library=settings.id_data.library)
+
+
 def content_key(settings) -> tuple:
     """Everything the spectrum of `settings` depends on: equal keys give equal spectra."""
     values = tuple((name, _value(getattr(settings, name))) for name in settings.bl_rna.properties.keys()
@@ -46,7 +51,7 @@ def content_key(settings) -> tuple:
         extra = None if mapping is None else (mapping.extend, tuple(
             (tuple(point.location), point.handle_type) for point in mapping.curves[0].points))
     elif settings.source == "CSV" and settings.filepath:
-        path = bpy.path.abspath(settings.filepath, library=settings.id_data.library)
+        path = csv_path(settings)
         try:
             status = os.stat(path)
             extra = (path, status.st_mtime_ns, status.st_size)
@@ -128,5 +133,5 @@ def _shape(settings) -> Spectrum:
     if source == "CSV":
         if not settings.filepath:
             raise SpectralError("no CSV file chosen")
-        return spectra.from_csv(bpy.path.abspath(settings.filepath), settings.units)
+        return spectra.from_csv(csv_path(settings), settings.units)
     raise SpectralError(f"unknown spectrum source {source!r}")

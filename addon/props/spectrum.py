@@ -82,7 +82,7 @@ class SpectrumFields:
                                        default="jakob2019")
     curve: bpy.props.PointerProperty(type=SpectralCurve)
     filepath: bpy.props.StringProperty(name="File", description="CSV file: wavelength, value per row",
-                                       subtype="FILE_PATH")
+                                       subtype="FILE_PATH", options={"PATH_SUPPORTS_BLEND_RELATIVE"})
     units: bpy.props.EnumProperty(name="Units", description="Wavelength unit of the CSV file",
                                   items=[("nm", "nm", "Nanometres"), ("um", "µm", "Micrometres"),
                                          ("A", "Å", "Ångström")], default="nm")

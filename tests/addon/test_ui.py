@@ -1,6 +1,7 @@
 """Panels, menus and UI lists draw against real data; presets and spectrum operators work."""
 
 import os
+import warnings
 from types import SimpleNamespace
 
 import numpy as np
@@ -150,6 +151,18 @@ def test_light_preset_keeps_the_wavelength_window(registered):
     presets.apply(spectrum, presets.LIGHT_PRESETS["TUNGSTEN"][1])
     assert (spectrum.source, spectrum.illuminant, spectrum.temperature) == ("ILLUMINANT", "A", 5500.0)
     assert spectrum.use_window and (spectrum.window_min, spectrum.window_max) == (275.0, 450.0)
+
+
+def test_spectrum_files_may_be_blend_relative(registered, tmp_path):
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "scene.blend"))
+    csv = tmp_path / "lamp.csv"
+    csv.write_text("400,1\n700,2\n")
+    spectrum = bpy.data.lights.new("Lamp", "POINT").spectral.spectrum
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # Blender warns about "//" paths on properties that do not allow them
+        assert bpy.ops.spectral.import_spectrum_csv(filepath=str(csv), **_target(spectrum)) == {"FINISHED"}
+        assert spectrum.filepath == "//lamp.csv"
+    assert to_spectrum(spectrum).values.max() == pytest.approx(2.0)
 
 
 def _target(settings):
