@@ -359,6 +359,21 @@ def test_animated_colours_do_not_replace_the_band_colours(registered, tmp_path):
     assert paint.node_tree.animation_data.action is not None
 
 
+def test_render_region_is_the_region_of_the_frame(registered, tmp_path):
+    """The exported camera sees the region alone, so Cycles renders the region, cropped; Cycles samples a
+    pixel alike whether it renders the frame or a region, so the region's pixels are the frame's (up to
+    rounding: 1e-5 relative)."""
+    scene, _cloud = blob_scene(tmp_path, width=16, height=12)
+    full, _scene = emulate(scene, 3, spp=2)
+    render = scene.render
+    render.use_border, render.use_crop_to_border = True, False
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.33, 0.77, 0.1, 0.55
+    region, tracer_scene = emulate(scene, 3, spp=2)
+    assert (tracer_scene.camera.width, tracer_scene.camera.height) == (7, 5)  # columns 5…11, rows 1…5 from below
+    np.testing.assert_allclose(region.film.xyz, full.film.xyz[12 - 6:12 - 1, 5:12], rtol=1e-5, atol=1e-8)
+    assert not render.use_crop_to_border  # the user's setting is back
+
+
 def test_f12_refuses_the_emulation(registered, tmp_path):
     scene, _cloud = blob_scene(tmp_path, width=8, height=6)
     scene.render.engine = "SPECTRAL_VOLUME"
