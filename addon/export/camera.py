@@ -23,8 +23,7 @@ from ..tracer.scene import Camera
 @dataclasses.dataclass(frozen=True)
 class Region:
     """The pixels a Render Region covers: `x`, `y` of its lower-left pixel in the full frame of
-    `full_width` × `full_height`; `crop`: the output is the region alone (else the full frame, empty
-    outside the region)."""
+    `full_width` × `full_height`. (Blender itself crops the image to it, or places it in the frame.)"""
 
     x: int
     y: int
@@ -32,7 +31,6 @@ class Region:
     height: int
     full_width: int
     full_height: int
-    crop: bool
 
 
 def resolution(scene) -> tuple[int, int]:
@@ -55,7 +53,7 @@ def render_region(scene) -> Region | None:
         raise SpectralError("the Render Region is empty: draw a larger region (Ctrl B) or turn it off")
     if (x0, y0, x1, y1) == (0, 0, width, height):
         return None
-    return Region(x0, y0, x1 - x0, y1 - y0, width, height, render.use_crop_to_border)
+    return Region(x0, y0, x1 - x0, y1 - y0, width, height)
 
 
 def camera_to_world(matrix_world) -> np.ndarray:

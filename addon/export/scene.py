@@ -26,7 +26,7 @@ import bpy
 
 from ..tracer.errors import SpectralError
 from ..tracer.scene import RenderSettings, Scene
-from .camera import Region, export_camera, render_region
+from .camera import export_camera
 from .fluids import fluid_domain, fluid_grids
 from .lights import export_light, export_world
 from .media import export_medium, require_material, spectral_material
@@ -36,12 +36,8 @@ from .volumes import volume_grids
 
 @dataclass
 class Export:
-    """The tracer scene; what the user should hear about it; the Render Region its camera sees (None: the
-    whole frame)."""
-
     scene: Scene
     warnings: list[str] = field(default_factory=list)
-    region: Region | None = None
 
 
 def render_settings(scene) -> RenderSettings:
@@ -126,4 +122,4 @@ def export_scene(depsgraph) -> Export:
         raise SpectralError("the scene has no lights: add a sun, point or spot light, or turn on the "
                             "Spectral World in the World properties")
     return Export(Scene(camera=camera, media=tuple(media), lights=tuple(lights), settings=render_settings(scene)),
-                  warnings, render_region(scene))
+                  warnings)
