@@ -30,6 +30,7 @@ BANDS = {
     "B450": ("Blue 450 nm", 450.0, 8.0),
     "G532": ("Green 532 nm", 532.0, 2.0),
 }
+CSV_UNIT_ITEMS = [("nm", "nm", "Nanometres"), ("um", "µm", "Micrometres"), ("A", "Å", "Ångström")]
 ILLUMINANT_LABELS = {"E": "E (equal energy)", "A": "A (tungsten)", "D65": "D65 (daylight)", "D50": "D50 (horizon)"}
 
 
@@ -69,7 +70,7 @@ class SpectrumFields:
     temperature: bpy.props.FloatProperty(name="Temperature", description="Black body temperature",
                                          default=5500.0, min=100.0, soft_min=800.0, soft_max=12000.0,
                                          subtype="TEMPERATURE", unit="TEMPERATURE")
-    band: bpy.props.EnumProperty(name="Band", items=[(k, v[0], f"{v[1]:g} nm ± {v[2]:g} nm")
+    band: bpy.props.EnumProperty(name="Band", description="A named narrow band", items=[(k, v[0], f"{v[1]:g} nm ± {v[2]:g} nm")
                                                      for k, v in BANDS.items()], default="UV365")
     peak: bpy.props.FloatProperty(name="Peak", description="Centre wavelength (nm)", default=520.0,
                                   min=LAMBDA_MIN, max=LAMBDA_MAX)
@@ -80,12 +81,12 @@ class SpectrumFields:
     rgb_method: bpy.props.EnumProperty(name="Method", description="RGB to spectrum recovery",
                                        items=[(k, v, f"colour-science's {v} recovery") for k, v in RGB_METHODS.items()],
                                        default="jakob2019")
-    curve: bpy.props.PointerProperty(type=SpectralCurve)
+    curve: bpy.props.PointerProperty(type=SpectralCurve, name="Curve",
+                                     description="The curve this spectrum is drawn with (Curve source)")
     filepath: bpy.props.StringProperty(name="File", description="CSV file: wavelength, value per row",
                                        subtype="FILE_PATH", options={"PATH_SUPPORTS_BLEND_RELATIVE"})
     units: bpy.props.EnumProperty(name="Units", description="Wavelength unit of the CSV file",
-                                  items=[("nm", "nm", "Nanometres"), ("um", "µm", "Micrometres"),
-                                         ("A", "Å", "Ångström")], default="nm")
+                                  items=CSV_UNIT_ITEMS, default="nm")
     preview: bpy.props.FloatVectorProperty(name="Preview", description="Colour of this spectrum",
                                            subtype="COLOR", size=3, get=_preview)
 

@@ -139,3 +139,26 @@ def test_missing_csv_is_named(registered, tmp_path):
     with pytest.raises(SpectralError, match=r"Light 'Lamp' spectrum: cannot read spectrum file .*missing.csv"):
         to_spectrum(spectrum)
     assert tuple(spectrum.preview) == (0.0, 0.0, 0.0)
+
+
+def _visible_properties(rna):
+    return [prop for prop in rna.properties if prop.identifier != "rna_type" and not prop.is_hidden
+            and not prop.identifier.startswith("bl_")]
+
+
+def test_every_setting_and_choice_has_a_description(registered):
+    """Tooltips: every visible property of the add-on's settings and operators, and every enum item."""
+    from addon import registration
+
+    groups = [cls.bl_rna for module in registration.MODULES for cls in module.CLASSES
+              if issubclass(cls, bpy.types.PropertyGroup)]
+    operators = [getattr(bpy.ops.spectral, name).get_rna_type() for name in dir(bpy.ops.spectral)]
+    missing = []
+    for rna in groups + operators:
+        for prop in _visible_properties(rna):
+            if not prop.description:
+                missing.append(f"{rna.identifier}.{prop.identifier}")
+            if prop.type == "ENUM":
+                missing += [f"{rna.identifier}.{prop.identifier}: {item.identifier}"
+                            for item in prop.enum_items if not item.description]
+    assert missing == []
