@@ -5,7 +5,7 @@ absorbers the colour D65 light keeps after one unit of optical depth. Settings t
 (anisotropy) and settings in error show black.
 
 Swatches are drawn on every redraw, so they never recover a spectrum from an RGB colour (a tenth of a
-second or more): a Colour spectrum not computed yet shows its colour, which is what the recovery matches
+second or more): a Color spectrum not computed yet shows its colour, which is what the recovery matches
 (before a light's wavelength window; the windowed colour shows once the spectrum has been computed,
 by a render, an export or Edit as Curve).
 """

@@ -12,7 +12,7 @@ from .spectrum import SpectralLightSpectrum
 
 class SpectralLightSettings(bpy.types.PropertyGroup):
     spectrum: bpy.props.PointerProperty(type=SpectralLightSpectrum, name="Spectrum",
-                                        description="The light's spectrum, in place of its colour")
+                                        description="The light's spectrum, in place of its color")
     curve_group: bpy.props.PointerProperty(type=bpy.types.NodeTree, name="Curves",
                                            description="Hidden node group holding this light's spectral curves")
 

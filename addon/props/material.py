@@ -43,7 +43,7 @@ class SpectralMaterialSettings(bpy.types.PropertyGroup):
     excitation: bpy.props.PointerProperty(type=SpectralExcitationSpectrum, name="Excitation",
                                           description="How strongly the fluorophore absorbs each wavelength")
     emission: bpy.props.PointerProperty(type=SpectralEmissionSpectrum, name="Emission",
-                                        description="The colour the fluorophore re-emits")
+                                        description="The color the fluorophore re-emits")
     quantum_yield: bpy.props.FloatProperty(name="Quantum Yield", description="Fraction of absorbed light re-emitted",
                                            default=0.9, min=0.0, max=1.0, subtype="FACTOR")
     use_blackbody: bpy.props.BoolProperty(name="Blackbody Emission", description="Glow by the temperature grid (fire)")

@@ -22,7 +22,7 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
     wavelength_sampling: bpy.props.EnumProperty(
         name="Wavelength Sampling", description="How each path's wavelengths are chosen",
         default=DEFAULTS.wavelength_sampling, items=[
-        ("colour", "Colour", "Importance by the colour matching functions: least colour noise"),
+        ("colour", "Color", "Importance by the color matching functions: least color noise"),
         ("visible", "Visible", "Importance by the eye's sensitivity (pbrt-v4's visible density)"),
         ("light", "Lights", "Importance by the lights' spectra"),
         ("uniform", "Uniform", "Every wavelength alike (380–700 nm)"),
@@ -36,7 +36,7 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
                                         default=DEFAULTS.lambda_min, min=LAMBDA_MIN, max=LAMBDA_MAX)
     lambda_max: bpy.props.FloatProperty(name="Max", description="Longest rendered wavelength (nm)",
                                         default=DEFAULTS.lambda_max, min=LAMBDA_MIN, max=LAMBDA_MAX)
-    cmf: bpy.props.EnumProperty(name="Colour Matching", description="Colour matching functions: spectrum to XYZ",
+    cmf: bpy.props.EnumProperty(name="Color Matching", description="Color matching functions: spectrum to XYZ",
                                 default=DEFAULTS.cmf, items=[
         ("cie1931", "CIE 1931", "The exact CIE 1931 2° observer tables"),
         ("wyman1", "Wyman (single lobe)", "Wyman–Sloan–Shirley single-lobe fit"),

@@ -17,8 +17,8 @@ SOURCES = {
     "ILLUMINANT": ("Preset", "A CIE standard illuminant: daylight, tungsten, fluorescent lamps, LEDs"),
     "BLACKBODY": ("Blackbody", "A black body's spectrum at a temperature"),
     "BAND": ("Band", "A named narrow band (a lamp or laser line)"),
-    "GAUSSIAN": ("Peak", "A Gaussian peak of a given centre and width"),
-    "COLOR": ("Colour", "A smooth spectrum with this RGB colour (Jakob–Hanika 2019 or Otsu 2018 recovery)"),
+    "GAUSSIAN": ("Peak", "A Gaussian peak of a given center and width"),
+    "COLOR": ("Color", "A smooth spectrum with this RGB color (Jakob–Hanika 2019 or Otsu 2018 recovery)"),
     "CURVE": ("Curve", "Drawn in a curve editor, wavelength along x"),
     "CSV": ("CSV File", "Imported from a file of wavelength, value rows"),
 }
@@ -72,11 +72,11 @@ class SpectrumFields:
                                          subtype="TEMPERATURE", unit="TEMPERATURE")
     band: bpy.props.EnumProperty(name="Band", description="A named narrow band", items=[(k, v[0], f"{v[1]:g} nm ± {v[2]:g} nm")
                                                      for k, v in BANDS.items()], default="UV365")
-    peak: bpy.props.FloatProperty(name="Peak", description="Centre wavelength (nm)", default=520.0,
+    peak: bpy.props.FloatProperty(name="Peak", description="Center wavelength (nm)", default=520.0,
                                   min=LAMBDA_MIN, max=LAMBDA_MAX)
     width: bpy.props.FloatProperty(name="Width", description="Standard deviation of the peak (nm)",
                                    default=20.0, min=0.5, soft_max=200.0)
-    color: bpy.props.FloatVectorProperty(name="Colour", description="Linear Rec.709 colour to match",
+    color: bpy.props.FloatVectorProperty(name="Color", description="Linear Rec.709 color to match",
                                          subtype="COLOR", size=3, min=0.0, max=1.0, default=(0.8, 0.8, 0.8))
     rgb_method: bpy.props.EnumProperty(name="Method", description="RGB to spectrum recovery",
                                        items=[(k, v, f"colour-science's {v} recovery") for k, v in RGB_METHODS.items()],
@@ -87,7 +87,7 @@ class SpectrumFields:
                                        subtype="FILE_PATH", options={"PATH_SUPPORTS_BLEND_RELATIVE"})
     units: bpy.props.EnumProperty(name="Units", description="Wavelength unit of the CSV file",
                                   items=CSV_UNIT_ITEMS, default="nm")
-    preview: bpy.props.FloatVectorProperty(name="Preview", description="Colour of this spectrum",
+    preview: bpy.props.FloatVectorProperty(name="Preview", description="Color of this spectrum",
                                            subtype="COLOR", size=3, get=_preview)
 
 

@@ -22,7 +22,7 @@ def draw_emulation(layout, scene) -> None:
     layout.prop(settings, "emulation_shader")
     layout.label(text="Render to Image or the command line (F12 renders nothing)", icon="INFO")
     layout.label(text="Fluorescence: absorption only, no re-emission", icon="ERROR")
-    layout.label(text="Surfaces: RGB colours upsampled; textures grey", icon="INFO")
+    layout.label(text="Surfaces: RGB colors upsampled; textures gray", icon="INFO")
 
 
 def draw_wavelengths(layout, scene) -> None:

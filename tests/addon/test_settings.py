@@ -146,15 +146,19 @@ def _visible_properties(rna):
             and not prop.identifier.startswith("bl_")]
 
 
-def test_every_setting_and_choice_has_a_description(registered):
-    """Tooltips: every visible property of the add-on's settings and operators, and every enum item."""
+def _addon_rnas():
+    """The RNA of the add-on's settings and operators."""
     from addon import registration
 
     groups = [cls.bl_rna for module in registration.MODULES for cls in module.CLASSES
               if issubclass(cls, bpy.types.PropertyGroup)]
-    operators = [getattr(bpy.ops.spectral, name).get_rna_type() for name in dir(bpy.ops.spectral)]
+    return groups + [getattr(bpy.ops.spectral, name).get_rna_type() for name in dir(bpy.ops.spectral)]
+
+
+def test_every_setting_and_choice_has_a_description(registered):
+    """Tooltips: every visible property of the add-on's settings and operators, and every enum item."""
     missing = []
-    for rna in groups + operators:
+    for rna in _addon_rnas():
         for prop in _visible_properties(rna):
             if not prop.description:
                 missing.append(f"{rna.identifier}.{prop.identifier}")
@@ -162,3 +166,15 @@ def test_every_setting_and_choice_has_a_description(registered):
                 missing += [f"{rna.identifier}.{prop.identifier}: {item.identifier}"
                             for item in prop.enum_items if not item.description]
     assert missing == []
+
+
+def test_ui_strings_spell_color_as_blender_does(registered):
+    texts = []
+    for rna in _addon_rnas():
+        for prop in _visible_properties(rna):
+            texts += [prop.name, prop.description]
+            if prop.type == "ENUM":
+                texts += [text for item in prop.enum_items for text in (item.name, item.description)]
+    british = [text for text in texts if "colour" in text.lower().replace("colour-science", "")
+               or "centre" in text.lower()]
+    assert british == []
