@@ -8,8 +8,12 @@ Esc (`test_break`) stops the render between passes. Bad input is reported as an 
 nothing, so Blender writes no output file. With the Cycles emulation chosen as renderer, F12 reports an error
 instead: Cycles cannot render from inside another engine's render (Blender crashes).
 
-While it is the engine, Blender's generic panels (those offered for every engine: camera, volume file
-and grids, output, fluid physics, ...) stay visible, and the viewport's Material Preview uses EEVEE.
+While it is the engine, those of Blender's generic panels (offered for every engine) that change what it
+renders stay visible: camera, lights, volume file and grids, mesh data, output and colour management,
+fluid smoke and fire, force fields and rigid bodies, animation and custom properties. Those for what it
+does not render are left out (`NOT_RENDERED`): particles, cloth, soft bodies, dynamic paint, liquids,
+legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The viewport's Material Preview
+uses EEVEE.
 """
 
 import bpy
@@ -74,6 +78,14 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
 
 CLASSES = (SpectralVolumeEngine,)
 GENERIC_ENGINE = "BLENDER_RENDER"  # Blender marks the panels that suit any engine with this name
+# Generic panels of what this engine does not render (by the start of their class names).
+NOT_RENDERED = ("PARTICLE_PT_", "TEXTURE_PT_", "NODE_PT_texture", "PHYSICS_PT_cloth", "PHYSICS_PT_softbody",
+                "PHYSICS_PT_dp_", "PHYSICS_PT_dynamic_paint", "PHYSICS_PT_collision", "PHYSICS_PT_liquid",
+                "PHYSICS_PT_viscosity", "PHYSICS_PT_diffusion", "PHYSICS_PT_mesh", "PHYSICS_PT_particles",
+                "RENDER_PT_freestyle", "VIEWLAYER_PT_freestyle", "MATERIAL_PT_freestyle", "RENDER_PT_gpencil",
+                "RENDER_PT_grease_pencil", "RENDER_PT_simplify_greasepencil", "DATA_PT_lightprobe",
+                "DATA_PT_context_lightprobe", "RENDER_PT_stereoscopy", "RENDER_PT_output_views",
+                "DATA_PT_camera_stereoscopy")
 _panels_shown = []
 
 
@@ -86,7 +98,8 @@ def _panel_classes(base=bpy.types.Panel):
 def register_extras():
     for panel in _panel_classes():
         engines = getattr(panel, "COMPAT_ENGINES", None)
-        if isinstance(engines, set) and GENERIC_ENGINE in engines and ENGINE_ID not in engines:
+        if (isinstance(engines, set) and GENERIC_ENGINE in engines and ENGINE_ID not in engines
+                and not panel.__name__.startswith(NOT_RENDERED)):
             engines.add(ENGINE_ID)
             _panels_shown.append(panel)
 
