@@ -10,9 +10,9 @@ instead: Cycles cannot render from inside another engine's render (Blender crash
 
 While it is the engine, those of Blender's generic panels (offered for every engine) that change what it
 renders stay visible: camera, lights, volume file and grids, mesh data, output and colour management,
-fluid smoke and fire, force fields and rigid bodies, animation and custom properties. Those for what it
-does not render are left out (`NOT_RENDERED`): particles, cloth, soft bodies, dynamic paint, liquids,
-legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The viewport's Material Preview
+fluid smoke and fire, force fields and rigid bodies, particles (they instance volumes), animation and
+custom properties. Those for what it does not render are left out (`NOT_RENDERED`): cloth, soft bodies,
+dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The viewport's Material Preview
 uses EEVEE.
 """
 
@@ -79,7 +79,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
 CLASSES = (SpectralVolumeEngine,)
 GENERIC_ENGINE = "BLENDER_RENDER"  # Blender marks the panels that suit any engine with this name
 # Generic panels of what this engine does not render (by the start of their class names).
-NOT_RENDERED = ("PARTICLE_PT_", "TEXTURE_PT_", "NODE_PT_texture", "PHYSICS_PT_cloth", "PHYSICS_PT_softbody",
+NOT_RENDERED = ("TEXTURE_PT_", "NODE_PT_texture", "PHYSICS_PT_cloth", "PHYSICS_PT_softbody",
                 "PHYSICS_PT_dp_", "PHYSICS_PT_dynamic_paint", "PHYSICS_PT_collision", "PHYSICS_PT_liquid",
                 "PHYSICS_PT_viscosity", "PHYSICS_PT_diffusion", "PHYSICS_PT_mesh", "PHYSICS_PT_particles",
                 "RENDER_PT_freestyle", "VIEWLAYER_PT_freestyle", "MATERIAL_PT_freestyle", "RENDER_PT_gpencil",

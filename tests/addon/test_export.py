@@ -133,6 +133,20 @@ def test_instanced_volumes_each_at_their_instance_matrix(registered, tmp_path):
     np.testing.assert_allclose(origins, [-2.0 + vdb_index_to_world()[0, 3], 3.0 + vdb_index_to_world()[0, 3]])
 
 
+def test_particles_instance_volumes(registered, tmp_path):
+    scene, cloud = basic_scene(tmp_path)
+    bpy.ops.mesh.primitive_plane_add(size=4.0)
+    emitter = bpy.context.active_object
+    emitter.modifiers.new("Particles", "PARTICLE_SYSTEM")
+    settings = emitter.particle_systems[0].settings
+    settings.count, settings.frame_start, settings.frame_end, settings.lifetime = 5, 1, 1, 100
+    settings.physics_type, settings.render_type, settings.instance_object = "NO", "OBJECT", cloud
+    scene.frame_set(2)
+    media = _export().scene.media
+    assert len(media) == 6  # the cloud and its five instances, each at its place
+    assert len({tuple(medium.density.index_to_world[:3, 3].round(6)) for medium in media}) == 6
+
+
 def test_geometry_nodes_volume_uses_the_object_material_slot(registered, tmp_path):
     _scene, cloud = basic_scene(tmp_path)
     geometry_nodes(cloud, "GeometryNodeVolumeCube")  # a new volume: its output has no material

@@ -184,10 +184,10 @@ def test_only_the_generic_panels_that_apply_are_shown(registered):
     from addon import engine
 
     shown = {panel.__name__ for panel in _all_panels() if "SPECTRAL_VOLUME" in getattr(panel, "COMPAT_ENGINES", ())}
-    for applies in ("DATA_PT_lens", "DATA_PT_spot", "DATA_PT_volume_grids", "RENDER_PT_format",
+    for applies in ("DATA_PT_lens", "DATA_PT_spot", "DATA_PT_volume_grids", "RENDER_PT_format", "PARTICLE_PT_render",
                     "RENDER_PT_color_management", "PHYSICS_PT_smoke", "PHYSICS_PT_fire", "PHYSICS_PT_cache"):
         assert applies in shown
-    for does_not in ("PARTICLE_PT_render", "PHYSICS_PT_cloth", "RENDER_PT_freestyle", "VIEWLAYER_PT_freestyle",
+    for does_not in ("PHYSICS_PT_cloth", "RENDER_PT_freestyle", "VIEWLAYER_PT_freestyle",
                      "TEXTURE_PT_image", "PHYSICS_PT_liquid", "DATA_PT_lightprobe"):
         assert does_not not in shown
     assert not any(name.startswith(engine.NOT_RENDERED) for name in shown)
