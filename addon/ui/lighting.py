@@ -2,7 +2,7 @@
 
 import bpy
 
-from ..props.render import ENGINE_ID
+from .panel import SpectralPanel
 from .spectrum import draw_spectrum
 
 SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT")
@@ -16,7 +16,6 @@ def draw_light(layout, light) -> None:
                      icon="ERROR")
         return
     column = layout.column()
-    column.use_property_split = True
     column.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
     if light.type == "SUN":
         column.prop(light, "angle")
@@ -38,7 +37,7 @@ def draw_world(layout, world) -> None:
         draw_spectrum(layout, settings.horizon, "Horizon", presets=True)
 
 
-class SPECTRAL_PT_light(bpy.types.Panel):
+class SPECTRAL_PT_light(SpectralPanel, bpy.types.Panel):
     bl_label = "Spectral Light"
     bl_idname = "SPECTRAL_PT_light"
     bl_space_type = "PROPERTIES"
@@ -47,13 +46,13 @@ class SPECTRAL_PT_light(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return context.engine == ENGINE_ID and getattr(context, "light", None) is not None
+        return super().poll(context) and getattr(context, "light", None) is not None
 
-    def draw(self, context):
-        draw_light(self.layout, context.light)
+    def draw_settings(self, layout, context):
+        draw_light(layout, context.light)
 
 
-class SPECTRAL_PT_world(bpy.types.Panel):
+class SPECTRAL_PT_world(SpectralPanel, bpy.types.Panel):
     bl_label = "Spectral World"
     bl_idname = "SPECTRAL_PT_world"
     bl_space_type = "PROPERTIES"
@@ -62,13 +61,13 @@ class SPECTRAL_PT_world(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return context.engine == ENGINE_ID and getattr(context, "world", None) is not None
+        return super().poll(context) and getattr(context, "world", None) is not None
 
     def draw_header(self, context):
         self.layout.prop(context.world.spectral, "enabled", text="")
 
-    def draw(self, context):
-        draw_world(self.layout, context.world)
+    def draw_settings(self, layout, context):
+        draw_world(layout, context.world)
 
 
 CLASSES = (SPECTRAL_PT_light, SPECTRAL_PT_world)

@@ -11,6 +11,7 @@ def draw_spectrum(layout, settings, text: str, presets: bool = False) -> None:
     """Draw `settings` (a spectrum PropertyGroup) under the heading `text`."""
     column = layout.column()
     header = column.row(align=True)
+    header.use_property_split = False
     header.label(text=text)
     if settings.ROLE:
         header.prop(settings, "preview", text="")
@@ -22,12 +23,11 @@ def draw_spectrum(layout, settings, text: str, presets: bool = False) -> None:
     if settings.source != "CURVE":
         point_at(column.operator("spectral.spectrum_to_curve", icon="FCURVE"), settings)
     if hasattr(settings, "use_window"):
-        row = column.row(align=True)
-        row.prop(settings, "use_window", text="Window")
-        sub = row.row(align=True)
-        sub.active = settings.use_window
-        sub.prop(settings, "window_min")
-        sub.prop(settings, "window_max")
+        column.prop(settings, "use_window", text="Wavelength Window")
+        window = column.column(align=True)
+        window.active = settings.use_window
+        window.prop(settings, "window_min", text="Window Min")
+        window.prop(settings, "window_max", text="Max")
     message = problem(settings)
     if message is not None:
         column.label(text=message, icon="ERROR")
@@ -44,17 +44,17 @@ def _draw_source(column, settings) -> None:
     elif source == "BAND":
         column.prop(settings, "band")
     elif source == "GAUSSIAN":
-        row = column.row(align=True)
-        row.prop(settings, "peak")
-        row.prop(settings, "width")
+        peak = column.column(align=True)
+        peak.prop(settings, "peak")
+        peak.prop(settings, "width")
     elif source == "COLOR":
-        row = column.row(align=True)
-        row.prop(settings, "color", text="")
-        row.prop(settings, "rgb_method", text="")
+        column.prop(settings, "color")
+        column.prop(settings, "rgb_method")
     elif source == "CURVE":
         _draw_curve(column, settings)
     elif source == "CSV":
         row = column.row(align=True)
+        row.use_property_split = False
         row.prop(settings, "filepath", text="")
         point_at(row.operator("spectral.import_spectrum_csv", text="", icon="FILEBROWSER"), settings)
         column.prop(settings, "units")

@@ -5,6 +5,8 @@ every `prop` must name a real property (its value is read, so getters run), ever
 UI list must be registered, and operator buttons accept only their operator's properties.
 """
 
+import inspect
+
 import bpy
 
 CONTAINERS = {"row", "column", "box", "split", "grid_flow", "column_flow", "panel_prop"}
@@ -84,5 +86,10 @@ class RecordingLayout:
 def draw(cls, context, method="draw") -> RecordingLayout:
     """Run `cls.<method>` (a Panel, Menu or UIList class) against `context`; the recorded layout."""
     layout = RecordingLayout()
-    getattr(cls, method)(type("Self", (), {"layout": layout})(), context)
+
+    def lookup(_self, name):  # the panel's other methods (draw_settings, ...), bound to the stand-in
+        value = getattr(cls, name)
+        return value.__get__(_self) if inspect.isfunction(value) else value
+
+    getattr(cls, method)(type("Self", (), {"layout": layout, "__getattr__": lookup})(), context)
     return layout

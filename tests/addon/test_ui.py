@@ -301,3 +301,21 @@ def test_redraws_never_recover_spectra_from_colours(registered, monkeypatch):
     monkeypatch.undo()  # once computed (by a render), the swatch is the spectrum's own colour
     to_spectrum(material.spectral.albedo)
     np.testing.assert_allclose(material.spectral.albedo.preview, (0.8, 0.2, 0.1), atol=0.02)
+
+
+def test_panels_follow_blender_layout_and_show_under_this_engine_only(registered):
+    from addon.ui.panel import SpectralPanel
+
+    scene, volume, material, lights = _scene_with_everything()
+    panels = _classes(bpy.types.Panel)
+    assert all(issubclass(panel, SpectralPanel) and panel.COMPAT_ENGINES == {ENGINE_ID} for panel in panels)
+    for obj in (volume, lights[0]):
+        context = _context(scene, obj, material if obj is volume else None)
+        for panel in panels:
+            if panel.poll(context):
+                layout = draw(panel, context)
+                assert layout.calls[:2] == [("set", ("use_property_split", True), {}),
+                                            ("set", ("use_property_decorate", True), {})]
+    scene.render.engine = "CYCLES"
+    context = _context(scene, volume, material)
+    assert not any(panel.poll(context) for panel in panels)  # the sidebar tab too
