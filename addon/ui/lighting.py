@@ -1,6 +1,7 @@
 """Light and World panels (Properties editor ▸ Light data, World) and the drawing the sidebar shares."""
 
 import bpy
+from bpy.app.translations import pgettext_iface as iface_
 
 from .panel import SpectralPanel
 from .spectrum import draw_spectrum
@@ -12,8 +13,8 @@ def draw_light(layout, light) -> None:
     """Brightness and size (the sun's Angle softens its shadows; the tracer's point and spot lights are
     points, so their Radius is greyed out and says why), then the spectrum."""
     if light.type not in SUPPORTED_LIGHTS:
-        layout.label(text=f"{light.type.title()} lights are not rendered spectrally (sun, point, spot are)",
-                     icon="ERROR")
+        layout.label(text=iface_("{} lights are not rendered spectrally (sun, point, spot are)").format(
+            iface_(light.bl_rna.properties["type"].enum_items[light.type].name)), translate=False, icon="ERROR")
         return
     column = layout.column()
     column.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")

@@ -1,5 +1,7 @@
 """Drawing one spectrum setting: source, its parameters, curve widget, swatch and problems."""
 
+from bpy.app.translations import pgettext_iface as iface_
+
 from .. import curves
 from ..export.spectra import problem
 from ..operators.targets import point_at
@@ -75,6 +77,7 @@ def _draw_curve(column, settings) -> None:
     selected = curves.selected_points(node.mapping)
     if len(selected) == 1:
         (nm, value), = selected
-        column.label(text=f"Selected: {nm:.1f} nm → {value:.3g}   (x = nm ÷ {curves.NM_PER_X:g})")
+        column.label(text=iface_("Selected: {:.1f} nm → {:.3g}   (x = nm ÷ {:g})").format(nm, value, curves.NM_PER_X),
+                     translate=False)
     else:
-        column.label(text=f"x: wavelength ÷ {curves.NM_PER_X:g} nm (5.5 = 550 nm)")
+        column.label(text=iface_("x: wavelength ÷ {:g} nm (5.5 = 550 nm)").format(curves.NM_PER_X), translate=False)

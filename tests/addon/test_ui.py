@@ -319,3 +319,19 @@ def test_panels_follow_blender_layout_and_show_under_this_engine_only(registered
     scene.render.engine = "CYCLES"
     context = _context(scene, volume, material)
     assert not any(panel.poll(context) for panel in panels)  # the sidebar tab too
+
+
+def test_labels_are_ready_for_translation():
+    """Blender translates a label by its text: one built by an f-string has no translatable msgid (build it
+    from `iface_("...").format(...)` and pass translate=False)."""
+    import ast
+    from pathlib import Path
+
+    import addon.ui
+
+    found = []
+    for path in Path(addon.ui.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.keyword) and node.arg == "text" and isinstance(node.value, ast.JoinedStr):
+                found.append(f"{path.name}:{node.value.lineno}")
+    assert found == []
