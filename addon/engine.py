@@ -12,8 +12,8 @@ While it is the engine, those of Blender's generic panels (offered for every eng
 renders stay visible: camera, lights, volume file and grids, mesh data, output and colour management,
 fluid smoke and fire, force fields and rigid bodies, particles (they instance volumes), animation and
 custom properties. Those for what it does not render are left out (`NOT_RENDERED`): cloth, soft bodies,
-dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The viewport's Material Preview
-uses EEVEE.
+dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The
+viewport's Material Preview uses EEVEE.
 """
 
 import bpy

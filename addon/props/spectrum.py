@@ -70,8 +70,9 @@ class SpectrumFields:
     temperature: bpy.props.FloatProperty(name="Temperature", description="Black body temperature",
                                          default=5500.0, min=100.0, soft_min=800.0, soft_max=12000.0,
                                          subtype="TEMPERATURE", unit="TEMPERATURE")
-    band: bpy.props.EnumProperty(name="Band", description="A named narrow band", items=[(k, v[0], f"{v[1]:g} nm ± {v[2]:g} nm")
-                                                     for k, v in BANDS.items()], default="UV365")
+    band: bpy.props.EnumProperty(name="Band", description="A named narrow band",
+                                 items=[(k, v[0], f"{v[1]:g} nm ± {v[2]:g} nm") for k, v in BANDS.items()],
+                                 default="UV365")
     peak: bpy.props.FloatProperty(name="Peak", description="Center wavelength (nm)", default=520.0,
                                   min=LAMBDA_MIN, max=LAMBDA_MAX)
     width: bpy.props.FloatProperty(name="Width", description="Standard deviation of the peak (nm)",
@@ -140,8 +141,8 @@ class SpectralExcitationSpectrum(SpectrumFields, bpy.types.PropertyGroup):
 
     ROLE = "absorption"
     source: _source(("BAND", "GAUSSIAN", "CURVE", "CSV"), "BAND")
-    value: bpy.props.FloatProperty(name="Strength", description="Absorption at the band's peak, per unit density and metre",
-                                   default=1.0, min=0.0, soft_max=10.0)
+    value: bpy.props.FloatProperty(name="Strength", default=1.0, min=0.0, soft_max=10.0,
+                                   description="Absorption at the band's peak, per unit density and metre")
 
 
 class SpectralEmissionSpectrum(SpectrumFields, bpy.types.PropertyGroup):

@@ -77,7 +77,7 @@ def _draw_curve(column, settings) -> None:
     selected = curves.selected_points(node.mapping)
     if len(selected) == 1:
         (nm, value), = selected
-        column.label(text=iface_("Selected: {:.1f} nm → {:.3g}   (x = nm ÷ {:g})").format(nm, value, curves.NM_PER_X),
-                     translate=False)
+        text = iface_("Selected: {:.1f} nm → {:.3g}   (x = nm ÷ {:g})").format(nm, value, curves.NM_PER_X)
+        column.label(text=text, translate=False)
     else:
         column.label(text=iface_("x: wavelength ÷ {:g} nm (5.5 = 550 nm)").format(curves.NM_PER_X), translate=False)
