@@ -10,8 +10,12 @@ reported as an error and renders nothing, so Blender writes no output file. With
 chosen as renderer, F12 reports an error instead: Cycles cannot render from inside another engine's
 render (Blender crashes).
 
-While it is the engine, Blender's generic panels (those offered for every engine: camera, volume file
-and grids, output, fluid physics, ...) stay visible, and the viewport's Material Preview uses EEVEE.
+While it is the engine, those of Blender's generic panels (offered for every engine) that change what it
+renders stay visible: camera, lights, volume file and grids, mesh data, output and colour management,
+fluid smoke and fire, force fields and rigid bodies, particles (they instance volumes), animation and
+custom properties. Those for what it does not render are left out (`NOT_RENDERED`): cloth, soft bodies,
+dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The
+viewport's Material Preview uses EEVEE.
 """
 
 import time
@@ -56,10 +60,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             return
         for warning in export.warnings:
             self.report({"WARNING"}, warning)
-        camera = export.scene.camera
-        if (camera.width, camera.height) != (self.resolution_x, self.resolution_y):
-            self.report({"ERROR"}, "render region (border) and crop are not supported: turn Render Region off")
-            return
+        camera = export.scene.camera  # with Render Region on, it sees the region: Blender crops or places it
         result = self.begin_result(0, 0, camera.width, camera.height)
         spp = export.scene.settings.spp
         time_left = TimeLeft()
@@ -103,6 +104,14 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
 
 CLASSES = (SpectralVolumeEngine,)
 GENERIC_ENGINE = "BLENDER_RENDER"  # Blender marks the panels that suit any engine with this name
+# Generic panels of what this engine does not render (by the start of their class names).
+NOT_RENDERED = ("TEXTURE_PT_", "NODE_PT_texture", "PHYSICS_PT_cloth", "PHYSICS_PT_softbody",
+                "PHYSICS_PT_dp_", "PHYSICS_PT_dynamic_paint", "PHYSICS_PT_collision", "PHYSICS_PT_liquid",
+                "PHYSICS_PT_viscosity", "PHYSICS_PT_diffusion", "PHYSICS_PT_mesh", "PHYSICS_PT_particles",
+                "RENDER_PT_freestyle", "VIEWLAYER_PT_freestyle", "MATERIAL_PT_freestyle", "RENDER_PT_gpencil",
+                "RENDER_PT_grease_pencil", "RENDER_PT_simplify_greasepencil", "DATA_PT_lightprobe",
+                "DATA_PT_context_lightprobe", "RENDER_PT_stereoscopy", "RENDER_PT_output_views",
+                "DATA_PT_camera_stereoscopy")
 _panels_shown = []
 
 
@@ -115,7 +124,8 @@ def _panel_classes(base=bpy.types.Panel):
 def register_extras():
     for panel in _panel_classes():
         engines = getattr(panel, "COMPAT_ENGINES", None)
-        if isinstance(engines, set) and GENERIC_ENGINE in engines and ENGINE_ID not in engines:
+        if (isinstance(engines, set) and GENERIC_ENGINE in engines and ENGINE_ID not in engines
+                and not panel.__name__.startswith(NOT_RENDERED)):
             engines.add(ENGINE_ID)
             _panels_shown.append(panel)
 

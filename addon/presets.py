@@ -2,7 +2,7 @@
 
 A preset is a dict of setting paths (relative to the settings it applies to) and values; a value
 that is a list of (nm, value) pairs is a curve's points. Applying a preset first resets every other
-setting to its default, so nothing of the previous look lingers.
+setting to its default, so nothing of the previous look lingers; a light keeps its wavelength window.
 """
 
 import numpy as np
@@ -44,8 +44,9 @@ MATERIAL_PRESETS = {
                                  "quantum_yield": 0.55}),
 }
 
-# Settings a preset never resets: the curve storage and the material's on/off switch.
-_KEEP = {"curve_group", "curve", "enabled", "node"}
+# Settings a preset never resets: the curve storage, the material's on/off switch, and a light's
+# wavelength window (a filter in front of the lamp, not part of the spectrum's shape a preset sets).
+_KEEP = {"curve_group", "curve", "enabled", "node", "use_window", "window_min", "window_max"}
 
 
 def reset(settings) -> None:

@@ -64,7 +64,7 @@ class BandPlan:
     warning: str | None = None
 
     def summary(self) -> str:
-        return (f"{self.bands.count} bands in {self.renders} Cycles render(s), estimated colour error "
+        return (f"{self.bands.count} bands in {self.renders} Cycles render(s), estimated color error "
                 f"ΔE00 {self.estimate:.2f} (target {self.target:g}, budget {self.max_renders} renders)")
 
 
@@ -286,7 +286,7 @@ def plan_bands(scene: Scene, target: float = TARGET_DELTA_E, max_renders: int = 
             return best
     if best is None:
         raise SpectralError(f"no band plan fits in {max_renders} Cycles render(s)")
-    warning = (f"the Cycles emulation's bands reach an estimated colour error of ΔE00 {best.estimate:.2f}, above "
+    warning = (f"the Cycles emulation's bands reach an estimated color error of ΔE00 {best.estimate:.2f}, above "
                f"the target {target:g}, within the budget of {max_renders} renders: raise Max Renders for "
                f"more bands")
     return BandPlan(best.bands, best.estimate, best.renders, target, max_renders, warning)

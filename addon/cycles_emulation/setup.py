@@ -25,7 +25,7 @@ def cycles_settings(borrowed, scene, *, samples: int, max_bounces: int, shader: 
     values = [
         (image, "color_depth", image.color_depth), (image, "color_mode", image.color_mode),  # restored last
         (render, "engine", "CYCLES"), (render, "use_persistent_data", True), (render, "use_compositing", False),
-        (render, "use_sequencer", False), (render, "film_transparent", False), (render, "use_border", False),
+        (render, "use_sequencer", False), (render, "film_transparent", False), (render, "use_crop_to_border", True),
         (render, "use_multiview", False),
         (image, "file_format", "OPEN_EXR"), (image, "color_depth", "32"), (image, "color_mode", "RGB"),
         (cycles, "device", "CPU"), (cycles, "shading_system", shader == "OSL"), (cycles, "samples", samples),

@@ -62,18 +62,19 @@ def _check(obj, domain) -> None:
                             "set its cache format to OpenVDB and bake again")
 
 
-def cell_to_world(obj, domain) -> np.ndarray:
-    """Index-to-world matrix of the domain's cells (cell centres at integer indices)."""
+def cell_to_world(obj, domain, matrix) -> np.ndarray:
+    """Index-to-world matrix of the domain's cells (cell centres at integer indices); `matrix` places
+    the domain object in the world."""
     corners = np.array([corner[:] for corner in obj.original.bound_box])
     low, high = corners.min(axis=0), corners.max(axis=0)
-    scale = np.abs(np.array(obj.matrix_world.to_scale()))
+    scale = np.abs(np.array(matrix.to_scale()))
     cells = base_resolution((high - low) * scale, domain.resolution_max)
     if domain.use_noise:
         cells = cells * domain.noise_scale
     step = (high - low) / cells
     cell_to_local = np.diag(np.append(step, 1.0))
     cell_to_local[:3, 3] = low + 0.5 * step
-    return np.array(obj.matrix_world, dtype=np.float64) @ cell_to_local
+    return np.array(matrix, dtype=np.float64) @ cell_to_local
 
 
 def cache_grid_name(name: str, noise: bool) -> str:
@@ -81,13 +82,14 @@ def cache_grid_name(name: str, noise: bool) -> str:
     return f"{name}_noise" if noise and name in ("density", "flame") else name
 
 
-def fluid_grids(obj, depsgraph, names) -> list[Grid]:
-    """The grids called `names` (aliases allowed: heat, fire, smoke) of a domain's cache, in world space."""
+def fluid_grids(obj, depsgraph, names, matrix) -> list[Grid]:
+    """The grids called `names` (aliases allowed: heat, fire, smoke) of a domain's cache, in world space
+    (the domain object at `matrix`)."""
     domain = fluid_domain(obj)
     _check(obj, domain)
     path = _cache_file(obj, domain, depsgraph.scene.frame_current - domain.cache_frame_offset)
-    matrix = cell_to_world(obj, domain)
+    to_world = cell_to_world(obj, domain, matrix)
     try:
-        return [load_grid(path, cache_grid_name(name, domain.use_noise), matrix) for name in names]
+        return [load_grid(path, cache_grid_name(name, domain.use_noise), to_world) for name in names]
     except SpectralError as problem:
         raise SpectralError(f"fluid domain {obj.name!r}: {problem}") from None

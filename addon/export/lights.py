@@ -29,13 +29,13 @@ def _axis(matrix_world, column: int) -> np.ndarray:
     return axis / np.linalg.norm(axis)
 
 
-def export_light(obj) -> Light | None:
-    """The tracer light of a light object, or None for unsupported types (area lights)."""
-    light = obj.data.original
+def export_light(obj, matrix) -> Light | None:
+    """The tracer light of an evaluated light object at world `matrix` (its own, or its instance's), or
+    None for unsupported types (area lights)."""
+    light = obj.data
     if light.type not in SUPPORTED:
         return None
     spectrum = to_spectrum(light.spectral.spectrum)
-    matrix = obj.matrix_world
     if light.type == "SUN":
         return Light(kind="sun", spectrum=spectrum, strength=light.energy, direction=_axis(matrix, 2),
                      angle=light.angle, name=obj.name)
@@ -49,9 +49,9 @@ def export_light(obj) -> Light | None:
 
 
 def export_world(world) -> Light | None:
-    if world is None or not world.original.spectral.enabled:
+    """The light of the evaluated scene's World, or None when its Spectral World is off."""
+    if world is None or not world.spectral.enabled:
         return None
-    world = world.original
     settings = world.spectral
     horizon = to_spectrum(settings.horizon) if settings.kind == "sky" else None
     return Light(kind=settings.kind, spectrum=to_spectrum(settings.spectrum), strength=settings.strength,

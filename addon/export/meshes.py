@@ -18,7 +18,7 @@ _EPSILON = 1e-6
 _FIT_TOLERANCE = 1e-4  # fraction of a voxel by which a mesh may exceed a whole number of voxels
 
 
-def _world_triangles(obj):
+def _world_triangles(obj, matrix):
     mesh = obj.to_mesh()
     try:
         mesh.calc_loop_triangles()
@@ -28,7 +28,7 @@ def _world_triangles(obj):
         mesh.loop_triangles.foreach_get("vertices", triangles)
     finally:
         obj.to_mesh_clear()
-    matrix = np.array(obj.matrix_world, dtype=np.float64)
+    matrix = np.array(matrix, dtype=np.float64)
     vertices = vertices.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
     return vertices, triangles.reshape(-1, 3)
 
@@ -43,9 +43,10 @@ def _crossings(tree, x: float, y: float, z0: float, z1: float) -> list[float]:
         z = location.z + max(_EPSILON, distance * _EPSILON)
 
 
-def voxelise(obj, voxel_size: float) -> Grid:
-    """Density grid of an evaluated mesh object (world space, `voxel_size` world units per voxel)."""
-    vertices, triangles = _world_triangles(obj)
+def voxelise(obj, voxel_size: float, matrix) -> Grid:
+    """Density grid of an evaluated mesh object placed at world `matrix` (world space, `voxel_size`
+    world units per voxel)."""
+    vertices, triangles = _world_triangles(obj, matrix)
     if len(triangles) == 0:
         raise SpectralError(f"mesh {obj.name!r} has no faces to fill with its volume material")
     low, high = vertices.min(axis=0), vertices.max(axis=0)

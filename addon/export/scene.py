@@ -6,11 +6,23 @@ Which objects become what:
 - Meshes with a fluid domain modifier (smoke/fire): the domain's OpenVDB cache, same materials rule.
 - Other meshes whose material has Spectral Volume enabled: voxelised at the object's Voxel Size.
 - Sun, point and spot lights; the World (when its Spectral World is on); the scene camera.
-Nothing is written to disk here and the Blender data is not changed. Spectral settings are read from
-the original data blocks, geometry and transforms from the evaluated ones.
+Materials are per metre, so the scene's Unit Scale scales them (addon.export.media). Motion blur and
+non-square pixels cannot be rendered: each gives one warning.
+Everything is read from the evaluated depsgraph, so animation and drivers are those of its frame (a
+render's own depsgraph never writes them back to the original data), and the instances it lists count:
+Geometry Nodes volumes (Mesh to Volume, Volume Cube, ...) and instanced collections, each at its
+instance matrix. Nothing is written to disk here and the Blender data is not changed.
+
+Setting an add-on property does not tag its data block for re-evaluation, so a viewport depsgraph (Render
+to Image, the CLI, scripts) may hold stale copies of the materials, lights, worlds and scene: those are
+tagged and re-evaluated first. A render's depsgraph is built fresh and needs none of this. Objects are not
+tagged (that would re-run their modifiers and simulations): their settings, the density grid's name and the
+voxel size, are read from the original objects.
 """
 
 from dataclasses import dataclass, field
+
+import bpy
 
 from ..tracer.errors import SpectralError
 from ..tracer.scene import RenderSettings, Scene
@@ -29,7 +41,8 @@ class Export:
 
 
 def render_settings(scene) -> RenderSettings:
-    s = scene.original.spectral
+    """The tracer settings of an (evaluated) scene."""
+    s = scene.spectral
     if s.lambda_min >= s.lambda_max:
         raise SpectralError(f"render settings: the wavelength range {s.lambda_min:g}–{s.lambda_max:g} nm is empty")
     return RenderSettings(spp=s.samples, seed=s.seed, max_depth=s.max_bounces,
@@ -38,41 +51,71 @@ def render_settings(scene) -> RenderSettings:
                           backend=s.backend)
 
 
-def _medium(obj, depsgraph):
-    """The medium of one object, or None when the object is not a volume."""
+def unsupported_settings(scene) -> list[str]:
+    """Warnings for the scene's render settings the tracer cannot follow."""
+    render, warnings = scene.render, []
+    if render.use_motion_blur:
+        warnings.append("motion blur is not supported: rendered without it (Render Properties ▸ Motion Blur)")
+    if render.pixel_aspect_x != render.pixel_aspect_y:
+        warnings.append(f"pixel aspect {render.pixel_aspect_x:g}:{render.pixel_aspect_y:g} is not supported: "
+                        "rendered with square pixels (Output Properties ▸ Format ▸ Aspect)")
+    return warnings
+
+
+def _medium(instance, depsgraph, volume_owners):
+    """The medium of one depsgraph instance, or None when it is not a volume."""
+    obj, matrix = instance.object, instance.matrix_world
+    metres_per_unit = depsgraph.scene_eval.unit_settings.scale_length
     if obj.type == "VOLUME" or (obj.type == "MESH" and fluid_domain(obj) is not None):
-        material = require_material(obj)
+        material = require_material(obj, depsgraph)
         names = [obj.original.spectral.density_grid]
         if material.spectral.use_blackbody:
             names.append(material.spectral.temperature_grid)
         read = volume_grids if obj.type == "VOLUME" else fluid_grids
-        grids = read(obj, depsgraph, names)
-        return export_medium(obj.name, material, grids[0], grids[1] if len(grids) > 1 else None)
+        grids = read(obj, depsgraph, names, matrix)
+        return export_medium(obj.name, material, grids[0], grids[1] if len(grids) > 1 else None, metres_per_unit)
     if obj.type == "MESH":
-        material = spectral_material(obj)
-        if material is not None:
-            return export_medium(obj.name, material, voxelise(obj, obj.original.spectral.voxel_size), None)
+        material = spectral_material(obj, depsgraph)
+        if material is None or (obj.original in volume_owners and not obj.data.polygons):
+            return None  # Geometry Nodes turned the mesh into a volume: only that volume renders
+        return export_medium(obj.name, material, voxelise(obj, obj.original.spectral.voxel_size, matrix), None,
+                             metres_per_unit)
     return None
+
+
+def _synchronise(depsgraph) -> None:
+    """Re-evaluate the data blocks that hold spectral settings (see the module docstring)."""
+    if depsgraph.mode == "RENDER":
+        return
+    depsgraph.scene.update_tag()
+    for blocks in (bpy.data.materials, bpy.data.lights, bpy.data.worlds):
+        for block in blocks:
+            block.update_tag()
+    depsgraph.update()
 
 
 def export_scene(depsgraph) -> Export:
     """Export the depsgraph's scene at its current frame. Raises SpectralError on bad input."""
-    scene = depsgraph.scene
-    warnings = []
+    _synchronise(depsgraph)
+    scene = depsgraph.scene_eval
+    warnings = unsupported_settings(scene)
     camera = export_camera(scene, scene.camera.evaluated_get(depsgraph) if scene.camera else None)
     media, lights = [], []
-    for obj in depsgraph.objects:
+    volume_owners = {instance.object.original for instance in depsgraph.object_instances
+                     if instance.is_instance and instance.object.type == "VOLUME"}
+    for instance in depsgraph.object_instances:  # each instance's object lives only for this iteration
+        obj = instance.object
         if obj.type == "LIGHT":
-            light = export_light(obj)
+            light = export_light(obj, instance.matrix_world)
             if light is None:
                 warnings.append(f"light {obj.name!r}: {obj.data.type.lower()} lights are not supported, skipped")
             else:
                 lights.append(light)
         else:
-            medium = _medium(obj, depsgraph)
+            medium = _medium(instance, depsgraph, volume_owners)
             if medium is not None:
                 media.append(medium)
-    world = export_world(scene.original.world)
+    world = export_world(scene.world)
     if world is not None:
         lights.append(world)
     if not lights and not any(medium.emission is not None for medium in media):

@@ -4,7 +4,7 @@
 A file-backed volume without modifiers is read straight from `grids.frame_filepath` (the file Blender
 chose for the frame of a sequence). Otherwise the evaluated grids are written to a temporary VDB file
 with `VolumeGrids.save` and read back. Either way the grid's index-to-object transform is composed
-with the object's world matrix.
+with the world matrix of the object or of its instance.
 """
 
 import tempfile
@@ -46,20 +46,21 @@ def _file_path(obj, depsgraph) -> Path:
     return path
 
 
-def _load(path: Path, names, obj) -> list[Grid]:
+def _load(path: Path, names, obj, matrix) -> list[Grid]:
     try:
-        return [_world(load_grid(path, name), obj.matrix_world) for name in names]
+        return [_world(load_grid(path, name), matrix) for name in names]
     except SpectralError as problem:
         raise SpectralError(f"Volume {obj.name!r}: {problem}") from None
 
 
-def volume_grids(obj, depsgraph, names) -> list[Grid]:
-    """The grids called `names` of an evaluated Volume object, in world space."""
+def volume_grids(obj, depsgraph, names, matrix) -> list[Grid]:
+    """The grids called `names` of an evaluated Volume object (or Geometry Nodes volume instance) whose
+    world matrix is `matrix`, in world space."""
     if not _has_active_modifiers(obj, depsgraph):
-        return _load(_file_path(obj, depsgraph), names, obj)
+        return _load(_file_path(obj, depsgraph), names, obj, matrix)
     with tempfile.TemporaryDirectory(prefix="spectral_volume_") as folder:
         path = Path(folder) / "evaluated.vdb"
         if not obj.data.grids.save(str(path)):
             raise SpectralError(f"Volume {obj.name!r}: its evaluated grids cannot be saved "
                                 f"({obj.data.grids.error_message or 'no grids at this frame'})")
-        return _load(path, names, obj)
+        return _load(path, names, obj, matrix)

@@ -13,7 +13,7 @@ ESTIMATES: dict[str, str] = {}
 
 
 class SPECTRAL_OT_estimate_emulation_bands(bpy.types.Operator):
-    """Choose the Cycles emulation's bands for the scene as it is now and estimate their colour error"""
+    """Choose the Cycles emulation's bands for the scene as it is now and estimate their color error"""
 
     bl_idname = "spectral.estimate_emulation_bands"
     bl_label = "Estimate Bands"

@@ -17,7 +17,8 @@ class SPECTRAL_OT_apply_light_preset(TargetProperties, bpy.types.Operator):
     bl_label = "Apply Light Preset"
     bl_options = {"REGISTER", "UNDO"}
 
-    preset: bpy.props.EnumProperty(name="Preset", items=_items(presets.LIGHT_PRESETS))
+    preset: bpy.props.EnumProperty(name="Preset", description="The light spectrum to apply",
+                                   items=_items(presets.LIGHT_PRESETS))
 
     def execute(self, context):
         settings = resolve(self)
@@ -35,7 +36,8 @@ class SPECTRAL_OT_apply_material_preset(bpy.types.Operator):
     bl_label = "Apply Material Preset"
     bl_options = {"REGISTER", "UNDO"}
 
-    preset: bpy.props.EnumProperty(name="Preset", items=_items(presets.MATERIAL_PRESETS))
+    preset: bpy.props.EnumProperty(name="Preset", description="The volume material to apply",
+                                   items=_items(presets.MATERIAL_PRESETS))
 
     @classmethod
     def poll(cls, context):

@@ -6,6 +6,7 @@ from bpy_extras.io_utils import ImportHelper
 
 from .. import curves
 from ..export.spectra import to_spectrum
+from ..props.spectrum import CSV_UNIT_ITEMS
 from ..tracer import spectra
 from ..tracer.errors import SpectralError
 from ..tracer.wavelengths import GRID
@@ -23,8 +24,8 @@ class SPECTRAL_OT_import_spectrum_csv(TargetProperties, bpy.types.Operator, Impo
 
     filename_ext = ".csv"
     filter_glob: bpy.props.StringProperty(default="*.csv;*.txt", options={"HIDDEN"})
-    units: bpy.props.EnumProperty(name="Units", items=[("nm", "nm", "Nanometres"), ("um", "µm", "Micrometres"),
-                                                       ("A", "Å", "Ångström")], default="nm")
+    units: bpy.props.EnumProperty(name="Units", description="Wavelength unit of the CSV file",
+                                  items=CSV_UNIT_ITEMS, default="nm")
 
     def execute(self, context):
         settings = resolve(self)

@@ -16,7 +16,8 @@ class SpectralAlbedoLevel(bpy.types.PropertyGroup):
 
     density: bpy.props.FloatProperty(name="Density", description="Grid density (before Density Scale) of this level",
                                      default=1.0, min=0.0, soft_max=10.0)
-    spectrum: bpy.props.PointerProperty(type=SpectralAlbedoSpectrum)
+    spectrum: bpy.props.PointerProperty(type=SpectralAlbedoSpectrum, name="Albedo",
+                                        description="Albedo spectrum at this density")
 
 
 class SpectralMaterialSettings(bpy.types.PropertyGroup):
@@ -24,19 +25,25 @@ class SpectralMaterialSettings(bpy.types.PropertyGroup):
                                     default=False)
     density_scale: bpy.props.FloatProperty(name="Density Scale", description="Multiplies the density grid",
                                            default=1.0, min=1e-6, soft_max=100.0)
-    extinction: bpy.props.PointerProperty(type=SpectralExtinctionSpectrum)
-    albedo: bpy.props.PointerProperty(type=SpectralAlbedoSpectrum)
+    extinction: bpy.props.PointerProperty(type=SpectralExtinctionSpectrum, name="Extinction",
+                                          description="Extinction per unit density and metre over wavelength")
+    albedo: bpy.props.PointerProperty(type=SpectralAlbedoSpectrum, name="Albedo",
+                                      description="Scattered fraction of the extinction at density 0")
     albedo_levels: bpy.props.CollectionProperty(type=SpectralAlbedoLevel,
                                                 description="Albedo at higher densities (the first albedo is at 0)")
-    albedo_index: bpy.props.IntProperty(name="Active Albedo Level", min=0)
-    anisotropy: bpy.props.PointerProperty(type=SpectralAnisotropySpectrum)
+    albedo_index: bpy.props.IntProperty(name="Active Albedo Level", min=0,
+                                        description="The albedo level selected in the list")
+    anisotropy: bpy.props.PointerProperty(type=SpectralAnisotropySpectrum, name="Anisotropy",
+                                          description="Henyey–Greenstein g over wavelength")
     phase: bpy.props.EnumProperty(name="Phase", description="Phase function", default="hg", items=[
         ("hg", "Henyey–Greenstein", "Forward or backward scattering by the anisotropy g"),
         ("rayleigh", "Rayleigh", "Scattering by particles much smaller than the wavelength")])
     use_fluorescence: bpy.props.BoolProperty(name="Fluorescence",
                                              description="Absorb the excitation band and re-emit at longer wavelengths")
-    excitation: bpy.props.PointerProperty(type=SpectralExcitationSpectrum)
-    emission: bpy.props.PointerProperty(type=SpectralEmissionSpectrum)
+    excitation: bpy.props.PointerProperty(type=SpectralExcitationSpectrum, name="Excitation",
+                                          description="How strongly the fluorophore absorbs each wavelength")
+    emission: bpy.props.PointerProperty(type=SpectralEmissionSpectrum, name="Emission",
+                                        description="The color the fluorophore re-emits")
     quantum_yield: bpy.props.FloatProperty(name="Quantum Yield", description="Fraction of absorbed light re-emitted",
                                            default=0.9, min=0.0, max=1.0, subtype="FACTOR")
     use_blackbody: bpy.props.BoolProperty(name="Blackbody Emission", description="Glow by the temperature grid (fire)")

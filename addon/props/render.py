@@ -21,8 +21,9 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
     bands: bpy.props.IntProperty(name="Bands", description="Render the wavelength range in this many passes",
                                  default=DEFAULTS.bands, min=1, soft_max=64)
     wavelength_sampling: bpy.props.EnumProperty(
-        name="Wavelength Sampling", default=DEFAULTS.wavelength_sampling, items=[
-        ("colour", "Colour", "Importance by the colour matching functions: least colour noise"),
+        name="Wavelength Sampling", description="How each path's wavelengths are chosen",
+        default=DEFAULTS.wavelength_sampling, items=[
+        ("colour", "Color", "Importance by the color matching functions: least color noise"),
         ("visible", "Visible", "Importance by the eye's sensitivity (pbrt-v4's visible density)"),
         ("light", "Lights", "Importance by the lights' spectra"),
         ("uniform", "Uniform", "Every wavelength alike (380–700 nm)"),
@@ -30,25 +31,29 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
         ("uv", "UV", "Uniform and into the ultraviolet, for fluorescence")])
     wavelengths_per_path: bpy.props.EnumProperty(
         name="Wavelengths per Path", default=str(DEFAULTS.wavelengths_per_path),
+        description="Wavelengths carried by each path",
         items=[("1", "1", "One wavelength per path"), ("4", "4 (Hero)", "A hero wavelength and three rotated ones")])
     lambda_min: bpy.props.FloatProperty(name="Min", description="Shortest rendered wavelength (nm)",
                                         default=DEFAULTS.lambda_min, min=LAMBDA_MIN, max=LAMBDA_MAX)
     lambda_max: bpy.props.FloatProperty(name="Max", description="Longest rendered wavelength (nm)",
                                         default=DEFAULTS.lambda_max, min=LAMBDA_MIN, max=LAMBDA_MAX)
-    cmf: bpy.props.EnumProperty(name="Colour Matching", default=DEFAULTS.cmf, items=[
+    cmf: bpy.props.EnumProperty(name="Color Matching", description="Color matching functions: spectrum to XYZ",
+                                default=DEFAULTS.cmf, items=[
         ("cie1931", "CIE 1931", "The exact CIE 1931 2° observer tables"),
         ("wyman1", "Wyman (single lobe)", "Wyman–Sloan–Shirley single-lobe fit"),
         ("wyman3", "Wyman (multi-lobe)", "Wyman–Sloan–Shirley multi-lobe fit")])
-    backend: bpy.props.EnumProperty(name="Backend", default=DEFAULTS.backend, items=[
+    backend: bpy.props.EnumProperty(name="Backend", description="Which kernel traces the paths",
+                                    default=DEFAULTS.backend, items=[
         ("numba", "Numba", "Compiled kernel (fast)"),
         ("numpy", "NumPy", "Reference kernel without a compiler")])
-    renderer: bpy.props.EnumProperty(name="Renderer", default="TRACER", items=[
+    renderer: bpy.props.EnumProperty(name="Renderer", description="What renders the spectral scene",
+                                     default="TRACER", items=[
         ("TRACER", "Tracer", "The spectral path tracer"),
         ("CYCLES", "Cycles Emulation", "Cycles, once per group of three wavelength bands, composited into XYZ "
          "(surfaces, area lights and Cycles features; no fluorescent re-emission). Render to Image or the "
          "command line, not F12")])
     emulation_band_mode: bpy.props.EnumProperty(name="Bands", default="AUTO", items=[
-        ("AUTO", "Automatic", "As many bands as the scene's spectra need for an estimated colour error below "
+        ("AUTO", "Automatic", "As many bands as the scene's spectra need for an estimated color error below "
          f"ΔE00 {TARGET_DELTA_E:g}, narrow where the eye sees them change, within the render budget"),
         ("FIXED", "Fixed", "A given number of equal bands")],
         description="How the Cycles emulation splits the wavelength range into bands")
@@ -60,7 +65,8 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
         name="Band Count", default=12, min=1, soft_max=48,
         description="Wavelength bands of the Cycles emulation: one Cycles render per three bands (per band "
                     "where the anisotropy changes with wavelength)")
-    emulation_shader: bpy.props.EnumProperty(name="Shader", default="SVM", items=[
+    emulation_shader: bpy.props.EnumProperty(name="Shader", description="How the emulation shades its volumes",
+                                             default="SVM", items=[
         ("SVM", "Nodes", "Plain Cycles nodes (faster)"),
         ("OSL", "OSL", "The Open Shading Language shader osl/spectral_volume.osl (CPU)")])
     scheduler_address: bpy.props.StringProperty(

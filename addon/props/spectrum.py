@@ -17,8 +17,8 @@ SOURCES = {
     "ILLUMINANT": ("Preset", "A CIE standard illuminant: daylight, tungsten, fluorescent lamps, LEDs"),
     "BLACKBODY": ("Blackbody", "A black body's spectrum at a temperature"),
     "BAND": ("Band", "A named narrow band (a lamp or laser line)"),
-    "GAUSSIAN": ("Peak", "A Gaussian peak of a given centre and width"),
-    "COLOR": ("Colour", "A smooth spectrum with this RGB colour (Jakob–Hanika 2019 or Otsu 2018 recovery)"),
+    "GAUSSIAN": ("Peak", "A Gaussian peak of a given center and width"),
+    "COLOR": ("Color", "A smooth spectrum with this RGB color (Jakob–Hanika 2019 or Otsu 2018 recovery)"),
     "CURVE": ("Curve", "Drawn in a curve editor, wavelength along x"),
     "CSV": ("CSV File", "Imported from a file of wavelength, value rows"),
 }
@@ -30,6 +30,7 @@ BANDS = {
     "B450": ("Blue 450 nm", 450.0, 8.0),
     "G532": ("Green 532 nm", 532.0, 2.0),
 }
+CSV_UNIT_ITEMS = [("nm", "nm", "Nanometres"), ("um", "µm", "Micrometres"), ("A", "Å", "Ångström")]
 ILLUMINANT_LABELS = {"E": "E (equal energy)", "A": "A (tungsten)", "D65": "D65 (daylight)", "D50": "D50 (horizon)"}
 
 
@@ -69,24 +70,25 @@ class SpectrumFields:
     temperature: bpy.props.FloatProperty(name="Temperature", description="Black body temperature",
                                          default=5500.0, min=100.0, soft_min=800.0, soft_max=12000.0,
                                          subtype="TEMPERATURE", unit="TEMPERATURE")
-    band: bpy.props.EnumProperty(name="Band", items=[(k, v[0], f"{v[1]:g} nm ± {v[2]:g} nm")
-                                                     for k, v in BANDS.items()], default="UV365")
-    peak: bpy.props.FloatProperty(name="Peak", description="Centre wavelength (nm)", default=520.0,
+    band: bpy.props.EnumProperty(name="Band", description="A named narrow band",
+                                 items=[(k, v[0], f"{v[1]:g} nm ± {v[2]:g} nm") for k, v in BANDS.items()],
+                                 default="UV365")
+    peak: bpy.props.FloatProperty(name="Peak", description="Center wavelength (nm)", default=520.0,
                                   min=LAMBDA_MIN, max=LAMBDA_MAX)
     width: bpy.props.FloatProperty(name="Width", description="Standard deviation of the peak (nm)",
                                    default=20.0, min=0.5, soft_max=200.0)
-    color: bpy.props.FloatVectorProperty(name="Colour", description="Linear Rec.709 colour to match",
+    color: bpy.props.FloatVectorProperty(name="Color", description="Linear Rec.709 color to match",
                                          subtype="COLOR", size=3, min=0.0, max=1.0, default=(0.8, 0.8, 0.8))
     rgb_method: bpy.props.EnumProperty(name="Method", description="RGB to spectrum recovery",
                                        items=[(k, v, f"colour-science's {v} recovery") for k, v in RGB_METHODS.items()],
                                        default="jakob2019")
-    curve: bpy.props.PointerProperty(type=SpectralCurve)
+    curve: bpy.props.PointerProperty(type=SpectralCurve, name="Curve",
+                                     description="The curve this spectrum is drawn with (Curve source)")
     filepath: bpy.props.StringProperty(name="File", description="CSV file: wavelength, value per row",
-                                       subtype="FILE_PATH")
+                                       subtype="FILE_PATH", options={"PATH_SUPPORTS_BLEND_RELATIVE"})
     units: bpy.props.EnumProperty(name="Units", description="Wavelength unit of the CSV file",
-                                  items=[("nm", "nm", "Nanometres"), ("um", "µm", "Micrometres"),
-                                         ("A", "Å", "Ångström")], default="nm")
-    preview: bpy.props.FloatVectorProperty(name="Preview", description="Colour of this spectrum",
+                                  items=CSV_UNIT_ITEMS, default="nm")
+    preview: bpy.props.FloatVectorProperty(name="Preview", description="Color of this spectrum",
                                            subtype="COLOR", size=3, get=_preview)
 
 
@@ -114,11 +116,12 @@ class SpectralAlbedoSpectrum(SpectrumFields, bpy.types.PropertyGroup):
 
 
 class SpectralExtinctionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
-    """Extinction per unit density over wavelength (multiplied by the density scale)."""
+    """Extinction per unit density and metre over wavelength (multiplied by the density scale; the scene's
+    Unit Scale says how many metres a Blender unit is)."""
 
     ROLE = "absorption"
     source: _source(("CONSTANT", "CURVE", "CSV"), "CONSTANT")
-    value: bpy.props.FloatProperty(name="Extinction", description="Extinction per unit density",
+    value: bpy.props.FloatProperty(name="Extinction", description="Extinction per unit density and metre",
                                    default=1.0, min=0.0, soft_max=10.0)
 
 
@@ -138,8 +141,8 @@ class SpectralExcitationSpectrum(SpectrumFields, bpy.types.PropertyGroup):
 
     ROLE = "absorption"
     source: _source(("BAND", "GAUSSIAN", "CURVE", "CSV"), "BAND")
-    value: bpy.props.FloatProperty(name="Strength", description="Absorption at the band's peak, per unit density",
-                                   default=1.0, min=0.0, soft_max=10.0)
+    value: bpy.props.FloatProperty(name="Strength", default=1.0, min=0.0, soft_max=10.0,
+                                   description="Absorption at the band's peak, per unit density and metre")
 
 
 class SpectralEmissionSpectrum(SpectrumFields, bpy.types.PropertyGroup):

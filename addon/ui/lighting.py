@@ -1,19 +1,30 @@
 """Light and World panels (Properties editor ▸ Light data, World) and the drawing the sidebar shares."""
 
 import bpy
+from bpy.app.translations import pgettext_iface as iface_
 
-from ..props.render import ENGINE_ID
+from .panel import SpectralPanel
 from .spectrum import draw_spectrum
 
 SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT")
 
 
 def draw_light(layout, light) -> None:
+    """Brightness and size (the sun's Angle softens its shadows; the tracer's point and spot lights are
+    points, so their Radius is greyed out and says why), then the spectrum."""
     if light.type not in SUPPORTED_LIGHTS:
-        layout.label(text=f"{light.type.title()} lights are not rendered spectrally (sun, point, spot are)",
-                     icon="ERROR")
+        layout.label(text=iface_("{} lights are not rendered spectrally (sun, point, spot are)").format(
+            iface_(light.bl_rna.properties["type"].enum_items[light.type].name)), translate=False, icon="ERROR")
         return
-    layout.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
+    column = layout.column()
+    column.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
+    if light.type == "SUN":
+        column.prop(light, "angle")
+    else:
+        radius = column.column()
+        radius.active = False
+        radius.prop(light, "shadow_soft_size", text="Radius")
+        radius.label(text="The tracer renders a point: only the Cycles emulation uses the Radius", icon="INFO")
     draw_spectrum(layout, light.spectral.spectrum, "Spectrum", presets=True)
 
 
@@ -27,7 +38,7 @@ def draw_world(layout, world) -> None:
         draw_spectrum(layout, settings.horizon, "Horizon", presets=True)
 
 
-class SPECTRAL_PT_light(bpy.types.Panel):
+class SPECTRAL_PT_light(SpectralPanel, bpy.types.Panel):
     bl_label = "Spectral Light"
     bl_idname = "SPECTRAL_PT_light"
     bl_space_type = "PROPERTIES"
@@ -36,13 +47,13 @@ class SPECTRAL_PT_light(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return context.engine == ENGINE_ID and getattr(context, "light", None) is not None
+        return super().poll(context) and getattr(context, "light", None) is not None
 
-    def draw(self, context):
-        draw_light(self.layout, context.light)
+    def draw_settings(self, layout, context):
+        draw_light(layout, context.light)
 
 
-class SPECTRAL_PT_world(bpy.types.Panel):
+class SPECTRAL_PT_world(SpectralPanel, bpy.types.Panel):
     bl_label = "Spectral World"
     bl_idname = "SPECTRAL_PT_world"
     bl_space_type = "PROPERTIES"
@@ -51,13 +62,13 @@ class SPECTRAL_PT_world(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return context.engine == ENGINE_ID and getattr(context, "world", None) is not None
+        return super().poll(context) and getattr(context, "world", None) is not None
 
     def draw_header(self, context):
         self.layout.prop(context.world.spectral, "enabled", text="")
 
-    def draw(self, context):
-        draw_world(self.layout, context.world)
+    def draw_settings(self, layout, context):
+        draw_world(layout, context.world)
 
 
 CLASSES = (SPECTRAL_PT_light, SPECTRAL_PT_world)

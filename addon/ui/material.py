@@ -2,7 +2,7 @@
 
 import bpy
 
-from ..props.render import ENGINE_ID
+from .panel import SpectralPanel
 from .spectrum import draw_spectrum
 
 
@@ -10,6 +10,7 @@ def draw_material_main(layout, material) -> None:
     """Density scale, phase, extinction and base albedo: the controls an artist reaches for first."""
     settings = material.spectral
     row = layout.row(align=True)
+    row.use_property_split = False
     row.prop(settings, "enabled")
     row.menu("SPECTRAL_MT_material_presets", text="Presets", icon="PRESET")
     body = layout.column()
@@ -25,6 +26,7 @@ def draw_material_main(layout, material) -> None:
 def draw_albedo_levels(layout, material) -> None:
     settings = material.spectral
     row = layout.row()
+    row.use_property_split = False
     row.template_list("SPECTRAL_UL_albedo_levels", "", settings, "albedo_levels", settings, "albedo_index", rows=2)
     buttons = row.column(align=True)
     buttons.operator("spectral.albedo_level_add", text="", icon="ADD")
@@ -52,9 +54,9 @@ def draw_blackbody(layout, material, renderer: str = "TRACER") -> None:
         layout.label(text="Cycles emulation: Nodes shader only (not OSL)", icon="INFO")
     layout.prop(settings, "temperature_grid")
     layout.prop(settings, "blackbody_intensity")
-    row = layout.row(align=True)
-    row.prop(settings, "temperature_scale", text="Scale")
-    row.prop(settings, "temperature_offset", text="Offset")
+    column = layout.column(align=True)
+    column.prop(settings, "temperature_scale", text="Temperature Scale")
+    column.prop(settings, "temperature_offset", text="Offset")
 
 
 class SPECTRAL_UL_albedo_levels(bpy.types.UIList):
@@ -64,22 +66,22 @@ class SPECTRAL_UL_albedo_levels(bpy.types.UIList):
         row.prop(item, "density", emboss=False)
 
 
-class MaterialPanel:
+class MaterialPanel(SpectralPanel):
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
     bl_context = "material"
 
     @classmethod
     def poll(cls, context):
-        return context.engine == ENGINE_ID and getattr(context, "material", None) is not None
+        return super().poll(context) and getattr(context, "material", None) is not None
 
 
 class SPECTRAL_PT_material(MaterialPanel, bpy.types.Panel):
     bl_label = "Spectral Volume"
     bl_idname = "SPECTRAL_PT_material"
 
-    def draw(self, context):
-        draw_material_main(self.layout, context.material)
+    def draw_settings(self, layout, context):
+        draw_material_main(layout, context.material)
 
 
 class SPECTRAL_PT_material_albedo(MaterialPanel, bpy.types.Panel):
@@ -88,8 +90,8 @@ class SPECTRAL_PT_material_albedo(MaterialPanel, bpy.types.Panel):
     bl_parent_id = "SPECTRAL_PT_material"
     bl_options = {"DEFAULT_CLOSED"}
 
-    def draw(self, context):
-        draw_albedo_levels(self.layout, context.material)
+    def draw_settings(self, layout, context):
+        draw_albedo_levels(layout, context.material)
 
 
 class SPECTRAL_PT_material_fluorescence(MaterialPanel, bpy.types.Panel):
@@ -101,8 +103,8 @@ class SPECTRAL_PT_material_fluorescence(MaterialPanel, bpy.types.Panel):
     def draw_header(self, context):
         self.layout.prop(context.material.spectral, "use_fluorescence", text="")
 
-    def draw(self, context):
-        draw_fluorescence(self.layout, context.material, context.scene.spectral.renderer)
+    def draw_settings(self, layout, context):
+        draw_fluorescence(layout, context.material, context.scene.spectral.renderer)
 
 
 class SPECTRAL_PT_material_blackbody(MaterialPanel, bpy.types.Panel):
@@ -114,8 +116,8 @@ class SPECTRAL_PT_material_blackbody(MaterialPanel, bpy.types.Panel):
     def draw_header(self, context):
         self.layout.prop(context.material.spectral, "use_blackbody", text="")
 
-    def draw(self, context):
-        draw_blackbody(self.layout, context.material, context.scene.spectral.renderer)
+    def draw_settings(self, layout, context):
+        draw_blackbody(layout, context.material, context.scene.spectral.renderer)
 
 
 CLASSES = (SPECTRAL_UL_albedo_levels, SPECTRAL_PT_material, SPECTRAL_PT_material_albedo,

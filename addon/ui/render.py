@@ -4,7 +4,7 @@ import bpy
 
 from ..export.fluids import fluid_domain
 from ..operators.emulation import ESTIMATES
-from ..props.render import ENGINE_ID
+from .panel import SpectralPanel
 
 
 def draw_render_main(layout, scene) -> None:
@@ -32,16 +32,16 @@ def draw_emulation(layout, scene) -> None:
     layout.prop(settings, "emulation_shader")
     layout.label(text="Render to Image or the command line (F12 renders nothing)", icon="INFO")
     layout.label(text="Fluorescence: absorption only, no re-emission", icon="ERROR")
-    layout.label(text="Surfaces: RGB colours upsampled; textures grey", icon="INFO")
+    layout.label(text="Surfaces: RGB colors upsampled; textures gray", icon="INFO")
 
 
 def draw_wavelengths(layout, scene) -> None:
     settings = scene.spectral
     layout.prop(settings, "wavelength_sampling")
     layout.prop(settings, "wavelengths_per_path")
-    row = layout.row(align=True)
-    row.prop(settings, "lambda_min")
-    row.prop(settings, "lambda_max")
+    column = layout.column(align=True)
+    column.prop(settings, "lambda_min", text="Wavelength Min")
+    column.prop(settings, "lambda_max", text="Max")
     layout.prop(settings, "bands")
     layout.prop(settings, "cmf")
 
@@ -55,22 +55,18 @@ def draw_object(layout, obj) -> None:
         layout.prop(settings, "voxel_size")
 
 
-class RenderPanel:
+class RenderPanel(SpectralPanel):
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
     bl_context = "render"
-
-    @classmethod
-    def poll(cls, context):
-        return context.engine == ENGINE_ID
 
 
 class SPECTRAL_PT_render(RenderPanel, bpy.types.Panel):
     bl_label = "Spectral Sampling"
     bl_idname = "SPECTRAL_PT_render"
 
-    def draw(self, context):
-        draw_render_main(self.layout, context.scene)
+    def draw_settings(self, layout, context):
+        draw_render_main(layout, context.scene)
 
 
 class SPECTRAL_PT_render_wavelengths(RenderPanel, bpy.types.Panel):
@@ -78,8 +74,8 @@ class SPECTRAL_PT_render_wavelengths(RenderPanel, bpy.types.Panel):
     bl_idname = "SPECTRAL_PT_render_wavelengths"
     bl_parent_id = "SPECTRAL_PT_render"
 
-    def draw(self, context):
-        draw_wavelengths(self.layout, context.scene)
+    def draw_settings(self, layout, context):
+        draw_wavelengths(layout, context.scene)
 
 
 class SPECTRAL_PT_render_performance(RenderPanel, bpy.types.Panel):
@@ -88,13 +84,13 @@ class SPECTRAL_PT_render_performance(RenderPanel, bpy.types.Panel):
     bl_parent_id = "SPECTRAL_PT_render"
     bl_options = {"DEFAULT_CLOSED"}
 
-    def draw(self, context):
+    def draw_settings(self, layout, context):
         settings = context.scene.spectral
-        self.layout.prop(settings, "backend")
-        self.layout.prop(settings, "scheduler_address")
+        layout.prop(settings, "backend")
+        layout.prop(settings, "scheduler_address")
 
 
-class SPECTRAL_PT_object(bpy.types.Panel):
+class SPECTRAL_PT_object(SpectralPanel, bpy.types.Panel):
     bl_label = "Spectral Volume"
     bl_idname = "SPECTRAL_PT_object"
     bl_space_type = "PROPERTIES"
@@ -104,10 +100,10 @@ class SPECTRAL_PT_object(bpy.types.Panel):
     @classmethod
     def poll(cls, context):
         obj = getattr(context, "object", None)
-        return context.engine == ENGINE_ID and obj is not None and obj.type in ("VOLUME", "MESH")
+        return super().poll(context) and obj is not None and obj.type in ("VOLUME", "MESH")
 
-    def draw(self, context):
-        draw_object(self.layout, context.object)
+    def draw_settings(self, layout, context):
+        draw_object(layout, context.object)
 
 
 CLASSES = (SPECTRAL_PT_render, SPECTRAL_PT_render_wavelengths, SPECTRAL_PT_render_performance, SPECTRAL_PT_object)

@@ -2,12 +2,12 @@
 
 import bpy
 
-from ..props.render import ENGINE_ID
 from .lighting import draw_light, draw_world
 from .material import draw_material_main
+from .panel import SpectralPanel
 
 
-class SidebarPanel:
+class SidebarPanel(SpectralPanel):
     bl_space_type = "VIEW_3D"
     bl_region_type = "UI"
     bl_category = "Spectral"
@@ -17,11 +17,8 @@ class SPECTRAL_PT_sidebar(SidebarPanel, bpy.types.Panel):
     bl_label = "Spectral Render"
     bl_idname = "SPECTRAL_PT_sidebar"
 
-    def draw(self, context):
+    def draw_settings(self, layout, context):
         scene = context.scene
-        layout = self.layout
-        if scene.render.engine != ENGINE_ID:
-            layout.prop(scene.render, "engine")
         layout.operator("spectral.render_image", text="Render", icon="RENDER_STILL")
         layout.operator("spectral.export_scene", text="Export Scene", icon="EXPORT")
         layout.prop(scene.spectral, "renderer")
@@ -34,14 +31,14 @@ class SPECTRAL_PT_sidebar_volume(SidebarPanel, bpy.types.Panel):
     bl_idname = "SPECTRAL_PT_sidebar_volume"
     bl_parent_id = "SPECTRAL_PT_sidebar"
 
-    def draw(self, context):
+    def draw_settings(self, layout, context):
         obj = context.active_object
         material = obj.active_material if obj is not None else None
         if material is None:
-            self.layout.label(text="Select an object with a material", icon="INFO")
+            layout.label(text="Select an object with a material", icon="INFO")
             return
-        self.layout.label(text=material.name, icon="MATERIAL")
-        draw_material_main(self.layout, material)
+        layout.label(text=material.name, icon="MATERIAL")
+        draw_material_main(layout, material)
 
 
 class SPECTRAL_PT_sidebar_lighting(SidebarPanel, bpy.types.Panel):
@@ -50,8 +47,7 @@ class SPECTRAL_PT_sidebar_lighting(SidebarPanel, bpy.types.Panel):
     bl_parent_id = "SPECTRAL_PT_sidebar"
     bl_options = {"DEFAULT_CLOSED"}
 
-    def draw(self, context):
-        layout = self.layout
+    def draw_settings(self, layout, context):
         obj = context.active_object
         if obj is not None and obj.type == "LIGHT":
             layout.label(text=obj.name, icon="LIGHT")
@@ -59,6 +55,7 @@ class SPECTRAL_PT_sidebar_lighting(SidebarPanel, bpy.types.Panel):
         world = context.scene.world
         if world is not None:
             row = layout.row()
+            row.use_property_split = False
             row.label(text=world.name, icon="WORLD")
             row.prop(world.spectral, "enabled", text="")
             draw_world(layout, world)

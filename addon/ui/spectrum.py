@@ -1,9 +1,10 @@
 """Drawing one spectrum setting: source, its parameters, curve widget, swatch and problems."""
 
+from bpy.app.translations import pgettext_iface as iface_
+
 from .. import curves
-from ..export.spectra import to_spectrum
+from ..export.spectra import problem
 from ..operators.targets import point_at
-from ..tracer.errors import SpectralError
 
 LIGHT_PRESETS_MENU = "SPECTRAL_MT_light_presets"
 
@@ -12,6 +13,7 @@ def draw_spectrum(layout, settings, text: str, presets: bool = False) -> None:
     """Draw `settings` (a spectrum PropertyGroup) under the heading `text`."""
     column = layout.column()
     header = column.row(align=True)
+    header.use_property_split = False
     header.label(text=text)
     if settings.ROLE:
         header.prop(settings, "preview", text="")
@@ -23,16 +25,14 @@ def draw_spectrum(layout, settings, text: str, presets: bool = False) -> None:
     if settings.source != "CURVE":
         point_at(column.operator("spectral.spectrum_to_curve", icon="FCURVE"), settings)
     if hasattr(settings, "use_window"):
-        row = column.row(align=True)
-        row.prop(settings, "use_window", text="Window")
-        sub = row.row(align=True)
-        sub.active = settings.use_window
-        sub.prop(settings, "window_min")
-        sub.prop(settings, "window_max")
-    try:
-        to_spectrum(settings)
-    except SpectralError as problem:
-        column.label(text=str(problem), icon="ERROR")
+        column.prop(settings, "use_window", text="Wavelength Window")
+        window = column.column(align=True)
+        window.active = settings.use_window
+        window.prop(settings, "window_min", text="Window Min")
+        window.prop(settings, "window_max", text="Max")
+    message = problem(settings)
+    if message is not None:
+        column.label(text=message, icon="ERROR")
 
 
 def _draw_source(column, settings) -> None:
@@ -46,17 +46,17 @@ def _draw_source(column, settings) -> None:
     elif source == "BAND":
         column.prop(settings, "band")
     elif source == "GAUSSIAN":
-        row = column.row(align=True)
-        row.prop(settings, "peak")
-        row.prop(settings, "width")
+        peak = column.column(align=True)
+        peak.prop(settings, "peak")
+        peak.prop(settings, "width")
     elif source == "COLOR":
-        row = column.row(align=True)
-        row.prop(settings, "color", text="")
-        row.prop(settings, "rgb_method", text="")
+        column.prop(settings, "color")
+        column.prop(settings, "rgb_method")
     elif source == "CURVE":
         _draw_curve(column, settings)
     elif source == "CSV":
         row = column.row(align=True)
+        row.use_property_split = False
         row.prop(settings, "filepath", text="")
         point_at(row.operator("spectral.import_spectrum_csv", text="", icon="FILEBROWSER"), settings)
         column.prop(settings, "units")
@@ -77,6 +77,7 @@ def _draw_curve(column, settings) -> None:
     selected = curves.selected_points(node.mapping)
     if len(selected) == 1:
         (nm, value), = selected
-        column.label(text=f"Selected: {nm:.1f} nm → {value:.3g}   (x = nm ÷ {curves.NM_PER_X:g})")
+        text = iface_("Selected: {:.1f} nm → {:.3g}   (x = nm ÷ {:g})").format(nm, value, curves.NM_PER_X)
+        column.label(text=text, translate=False)
     else:
-        column.label(text=f"x: wavelength ÷ {curves.NM_PER_X:g} nm (5.5 = 550 nm)")
+        column.label(text=iface_("x: wavelength ÷ {:g} nm (5.5 = 550 nm)").format(curves.NM_PER_X), translate=False)

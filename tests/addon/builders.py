@@ -105,3 +105,16 @@ def basic_scene(tmp_path):
     cloud = add_volume(write_vdb(tmp_path / "cloud.vdb"))
     cloud.material_slots[0].material.spectral.density_scale = 4.0
     return scene, cloud
+
+
+def geometry_nodes(obj, node_type):
+    """Give `obj` a Geometry Nodes modifier whose tree is Group Input → `node_type` → Group Output."""
+    tree = bpy.data.node_groups.new(node_type, "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    node = tree.nodes.new(node_type)
+    if node.inputs and node.inputs[0].type == "GEOMETRY":
+        tree.links.new(tree.nodes.new("NodeGroupInput").outputs[0], node.inputs[0])
+    tree.links.new(node.outputs[0], tree.nodes.new("NodeGroupOutput").inputs[0])
+    obj.modifiers.new("Geometry Nodes", "NODES").node_group = tree
+    return node

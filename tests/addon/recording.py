@@ -5,6 +5,8 @@ every `prop` must name a real property (its value is read, so getters run), ever
 UI list must be registered, and operator buttons accept only their operator's properties.
 """
 
+import inspect
+
 import bpy
 
 CONTAINERS = {"row", "column", "box", "split", "grid_flow", "column_flow", "panel_prop"}
@@ -41,6 +43,7 @@ class RecordingLayout:
 
     def __setattr__(self, name, value):
         assert name in SETTABLE, f"UILayout has no settable attribute {name!r}"
+        self.calls.append(("set", (name, value), {}))
 
     def __getattr__(self, name):
         assert name in bpy.types.UILayout.bl_rna.functions or name in CONTAINERS, f"UILayout has no {name}()"
@@ -66,6 +69,16 @@ class RecordingLayout:
             _check_property(args[4], args[5])
         return None
 
+    def setting_before(self, index, name):
+        """The last value `name` was set to before call `index` (None: never)."""
+        values = [args[1] for kind, args, _kwargs in self.calls[:index] if kind == "set" and args[0] == name]
+        return values[-1] if values else None
+
+    def index(self, kind, data, name):
+        """Index of the first `kind` call (prop, ...) on `data`'s property `name`."""
+        return next(i for i, (call, args, _kwargs) in enumerate(self.calls)
+                    if call == kind and args[:2] == (data, name))
+
     def texts(self, kind="label"):
         return [kwargs.get("text", "") for name, _args, kwargs in self.calls if name == kind]
 
@@ -73,5 +86,10 @@ class RecordingLayout:
 def draw(cls, context, method="draw") -> RecordingLayout:
     """Run `cls.<method>` (a Panel, Menu or UIList class) against `context`; the recorded layout."""
     layout = RecordingLayout()
-    getattr(cls, method)(type("Self", (), {"layout": layout})(), context)
+
+    def lookup(_self, name):  # the panel's other methods (draw_settings, ...), bound to the stand-in
+        value = getattr(cls, name)
+        return value.__get__(_self) if inspect.isfunction(value) else value
+
+    getattr(cls, method)(type("Self", (), {"layout": layout, "__getattr__": lookup})(), context)
     return layout

@@ -321,7 +321,7 @@ def test_render_to_image_uses_the_emulation_when_chosen(registered, tmp_path, ca
     exr = tmp_path / "emulated.exr"
     assert bpy.ops.spectral.render_image(image_name="Emulated", exr_path=str(exr)) == {"FINISHED"}
     out = capfd.readouterr().out
-    assert "Cycles emulation: 1 bands in 1 Cycles render(s), estimated colour error ΔE00 0.00" in out
+    assert "Cycles emulation: 1 bands in 1 Cycles render(s), estimated color error ΔE00 0.00" in out
     # Found while rendering, shown when it ends.
     assert "Warning: material 'Marble': colours computed by nodes" in out
     image = bpy.data.images["Emulated"]
@@ -358,6 +358,21 @@ def test_animated_colours_do_not_replace_the_band_colours(registered, tmp_path):
         assert copy.node_tree.animation_data is None
         assert tuple(copy.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value) != (0.8, 0.1, 0.05, 1.0)
     assert paint.node_tree.animation_data.action is not None
+
+
+def test_render_region_is_the_region_of_the_frame(registered, tmp_path):
+    """The exported camera sees the region alone, so Cycles renders the region, cropped; Cycles samples a
+    pixel alike whether it renders the frame or a region, so the region's pixels are the frame's (up to
+    rounding: 1e-5 relative)."""
+    scene, _cloud = blob_scene(tmp_path, width=16, height=12)
+    full, _scene = emulate(scene, 3, spp=2)
+    render = scene.render
+    render.use_border, render.use_crop_to_border = True, False
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.33, 0.77, 0.1, 0.55
+    region, tracer_scene = emulate(scene, 3, spp=2)
+    assert (tracer_scene.camera.width, tracer_scene.camera.height) == (7, 5)  # columns 5…11, rows 1…5 from below
+    np.testing.assert_allclose(region.film.xyz, full.film.xyz[12 - 6:12 - 1, 5:12], rtol=1e-5, atol=1e-8)
+    assert not render.use_crop_to_border  # the user's setting is back
 
 
 def test_f12_refuses_the_emulation(registered, tmp_path):
@@ -425,7 +440,7 @@ def test_estimate_bands_shows_the_plan_in_the_panel(registered, tmp_path):
     render_ui.draw_render_main(panel, scene)
     assert ("prop", (scene.spectral, "emulation_max_renders"), {}) in panel.calls
     assert any(call[0] == "operator" and call[1][0] == "spectral.estimate_emulation_bands" for call in panel.calls)
-    assert any("Cycles render(s), estimated colour error ΔE00" in text for text in panel.texts())
+    assert any("Cycles render(s), estimated color error ΔE00" in text for text in panel.texts())
     scene.spectral.emulation_band_mode = "FIXED"
     panel = RecordingLayout()
     render_ui.draw_render_main(panel, scene)

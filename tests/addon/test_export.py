@@ -9,10 +9,11 @@ from addon.export import camera as camera_export
 from addon.export.lights import point_intensity
 from addon.export.scene import export_scene
 from addon.tracer import grids, spectra
+from addon.tracer.compile import camera_extent
 from addon.tracer.errors import SpectralError
 from addon.tracer.scene import Grid
 from addon.tracer.scene_io import load_scene
-from tests.addon.builders import (PATTERN, add_camera, add_fluid_domain, add_sun, basic_scene, link,
+from tests.addon.builders import (PATTERN, add_camera, add_fluid_domain, add_sun, basic_scene, geometry_nodes, link,
                                   spectral_material, vdb_index_to_world, write_vdb)
 
 bpy = pytest.importorskip("bpy")
@@ -100,6 +101,60 @@ def test_evaluated_volume_with_mesh_to_volume_modifier(registered, tmp_path):
     np.testing.assert_allclose(world.max(axis=0), [1.0, 0.5, 0.75], atol=0.16)
 
 
+def test_geometry_nodes_mesh_to_volume_is_an_instance_at_its_matrix(registered):
+    add_camera()
+    add_sun()
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(2.0, 0.0, 0.5))
+    cube = bpy.context.active_object
+    cube.data.materials.append(spectral_material())
+    node = geometry_nodes(cube, "GeometryNodeMeshToVolume")
+    node.inputs["Resolution Mode"].default_value = "Size"
+    node.inputs["Voxel Size"].default_value = 0.1
+    (medium,) = _export().scene.media  # the volume only: the nodes leave the mesh empty
+    assert medium.name == "Cube"
+    centres = np.argwhere(medium.density.values >= 0.5)
+    world = (medium.density.index_to_world @ np.c_[centres, np.ones(len(centres))].T).T[:, :3]
+    np.testing.assert_allclose(world.min(axis=0), [1.5, -0.5, 0.0], atol=0.16)  # the cube, in world space
+    np.testing.assert_allclose(world.max(axis=0), [2.5, 0.5, 1.0], atol=0.16)
+
+
+def test_instanced_volumes_each_at_their_instance_matrix(registered, tmp_path):
+    _scene, cloud = basic_scene(tmp_path)
+    cloud.location = (0.0, 0.0, 1.0)
+    group = bpy.data.collections.new("Clouds")
+    group.objects.link(cloud)
+    bpy.context.scene.collection.objects.unlink(cloud)
+    for x in (-2.0, 3.0):
+        holder = link(bpy.data.objects.new(f"Holder {x}", None))
+        holder.instance_type, holder.instance_collection, holder.location = "COLLECTION", group, (x, 0.0, 0.0)
+    media = _export().scene.media
+    assert len(media) == 2
+    origins = sorted(medium.density.index_to_world[0, 3] for medium in media)
+    np.testing.assert_allclose(origins, [-2.0 + vdb_index_to_world()[0, 3], 3.0 + vdb_index_to_world()[0, 3]])
+
+
+def test_particles_instance_volumes(registered, tmp_path):
+    scene, cloud = basic_scene(tmp_path)
+    bpy.ops.mesh.primitive_plane_add(size=4.0)
+    emitter = bpy.context.active_object
+    emitter.modifiers.new("Particles", "PARTICLE_SYSTEM")
+    settings = emitter.particle_systems[0].settings
+    settings.count, settings.frame_start, settings.frame_end, settings.lifetime = 5, 1, 1, 100
+    settings.physics_type, settings.render_type, settings.instance_object = "NO", "OBJECT", cloud
+    scene.frame_set(2)
+    media = _export().scene.media
+    assert len(media) == 6  # the cloud and its five instances, each at its place
+    assert len({tuple(medium.density.index_to_world[:3, 3].round(6)) for medium in media}) == 6
+
+
+def test_geometry_nodes_volume_uses_the_object_material_slot(registered, tmp_path):
+    _scene, cloud = basic_scene(tmp_path)
+    geometry_nodes(cloud, "GeometryNodeVolumeCube")  # a new volume: its output has no material
+    (medium,) = _export().scene.media
+    assert medium.density_scale == 4.0  # the material of the object's slot
+    assert medium.density.values.max() == pytest.approx(1.0)  # the cube's density, not the file's
+
+
 def test_mesh_with_spectral_material_is_voxelised(registered):
     add_camera()
     add_sun()
@@ -183,6 +238,73 @@ def test_camera_conventions(registered):
     data.type = "PANO"
     with pytest.raises(SpectralError, match="panoramic cameras are not supported|pano cameras are not supported"):
         camera_export.export_camera(scene)
+
+
+def _film_point(camera, px, py):
+    """Camera-space film position (at z = -1 for perspective) of pixel corner (px, py), counted from the
+    lower left."""
+    extent_x, extent_y, offset_x, offset_y = camera_extent(camera)
+    return np.array([(px / camera.width - 0.5) * extent_x + offset_x, (py / camera.height - 0.5) * extent_y + offset_y])
+
+
+CAMERA_CASES = [(kind, fit, size) for kind in ("PERSP", "ORTHO") for fit in ("AUTO", "HORIZONTAL", "VERTICAL")
+                for size in ((40, 30), (30, 40))]
+
+
+@pytest.mark.parametrize("kind, fit, size", CAMERA_CASES)
+def test_camera_frame_matches_blender_view_frame(registered, kind, fit, size):
+    scene = bpy.context.scene
+    data = add_camera().data
+    data.type, data.sensor_fit, data.lens, data.ortho_scale = kind, fit, 35.0, 5.0
+    data.sensor_width, data.sensor_height, data.shift_x, data.shift_y = 36.0, 20.0, 0.1, -0.05
+    scene.render.resolution_x, scene.render.resolution_y = size
+    exported = camera_export.export_camera(scene)
+    corners = np.array([corner[:] for corner in data.view_frame(scene=scene)])
+    if kind == "PERSP":
+        corners = corners[:, :2] / -corners[:, 2:]
+    low, high = _film_point(exported, 0, 0), _film_point(exported, exported.width, exported.height)
+    np.testing.assert_allclose(corners[:, :2].min(axis=0), low, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(corners[:, :2].max(axis=0), high, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("kind, fit, size", CAMERA_CASES)
+def test_render_region_camera_sees_the_region_of_the_frame(registered, kind, fit, size):
+    scene = bpy.context.scene
+    data = add_camera().data
+    data.type, data.sensor_fit, data.shift_x, data.shift_y = kind, fit, 0.1, -0.05
+    render = scene.render
+    render.resolution_x, render.resolution_y = size
+    full = camera_export.export_camera(scene)
+    render.use_border = True
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.33, 0.77, 0.1, 0.55
+    region = camera_export.render_region(scene)
+    width, height = size
+    assert (region.x, region.y) == (int(np.float32(0.33) * width), int(np.float32(0.1) * height))
+    assert (region.x + region.width, region.y + region.height) == (int(np.float32(0.77) * width),
+                                                                    int(np.float32(0.55) * height))
+    part = camera_export.export_camera(scene)
+    assert (part.width, part.height) == (region.width, region.height)
+    np.testing.assert_allclose(_film_point(part, 0, 0), _film_point(full, region.x, region.y), atol=1e-9)
+    np.testing.assert_allclose(_film_point(part, part.width, part.height),
+                               _film_point(full, region.x + region.width, region.y + region.height), atol=1e-9)
+
+
+def test_unit_scale_makes_materials_per_metre(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    assert _export().scene.media[0].density_scale == pytest.approx(4.0)
+    scene.unit_settings.scale_length = 0.01  # a Blender unit is a centimetre: 1/100 of the optical depth
+    assert _export().scene.media[0].density_scale == pytest.approx(0.04)
+
+
+def test_settings_the_tracer_cannot_follow_are_warned(registered, tmp_path):
+    scene, _cloud = basic_scene(tmp_path)
+    assert _export().warnings == []
+    scene.render.use_motion_blur = True
+    scene.render.pixel_aspect_x = 2.0
+    warnings = _export().warnings
+    assert len(warnings) == 2
+    assert warnings[0].startswith("motion blur is not supported")
+    assert warnings[1].startswith("pixel aspect 2:1 is not supported: rendered with square pixels")
 
 
 def test_lights_and_world(registered, tmp_path):

@@ -42,6 +42,31 @@ def test_f12_writes_combined_and_xyz_passes(registered, tmp_path):
     assert channels["ViewLayer.Combined.A"].min() == 1.0
 
 
+@pytest.mark.parametrize("crop", [False, True])
+def test_f12_renders_the_render_region(registered, tmp_path, crop):
+    """Blender keeps the full frame (empty outside the region) or crops it to the region: of 16 × 12
+    pixels, x 5.28…12.32 → columns 5…11 and y 1.2…6.6 → rows 1…5 from the bottom (Blender truncates)."""
+    scene, _cloud = basic_scene(tmp_path)
+    render = scene.render
+    render.engine = "SPECTRAL_VOLUME"
+    render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    render.filepath = str(tmp_path / "region.exr")
+    render.use_border, render.use_crop_to_border = True, crop
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.33, 0.77, 0.1, 0.55
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    channels = image_io.read_exr(tmp_path / "region.exr")
+    alpha, y = channels["ViewLayer.Combined.A"], channels["ViewLayer.XYZ.Y"]
+    if crop:
+        assert alpha.shape == (5, 7) and alpha.min() == 1.0
+    else:
+        assert alpha.shape == (12, 16)
+        inside = np.zeros((12, 16), dtype=bool)
+        inside[12 - 6:12 - 1, 5:12] = True  # rows counted from the top
+        assert (alpha[inside] == 1.0).all() and (alpha[~inside] == 0.0).all()
+        y = y[inside]
+    assert y.max() > 0
+
+
 def test_f12_with_bad_input_reports_and_keeps_the_old_file(registered, tmp_path):
     scene, cloud = basic_scene(tmp_path)
     cloud.data.filepath = str(tmp_path / "gone.vdb")

@@ -1,10 +1,14 @@
 """Panels, menus and UI lists draw against real data; presets and spectrum operators work."""
 
+import os
+import warnings
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from addon import curves, presets, registration
+from addon.export.spectra import to_spectrum
 from addon.props.render import ENGINE_ID
 from addon.tracer.errors import SpectralError
 
@@ -102,6 +106,17 @@ def test_light_spectrum_shows_presets_and_swatch(registered):
     assert any("not rendered spectrally" in text for text in layout.texts())
 
 
+def test_light_size_is_drawn_sun_angle_and_greyed_radius(registered):
+    scene, _volume, _material, lights = _scene_with_everything()
+    sun, point, spot = (obj.data for obj in lights[:3])
+    layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, lights[0]))
+    assert layout.setting_before(layout.index("prop", sun, "angle"), "active") in (None, True)
+    for obj, light in ((lights[1], point), (lights[2], spot)):
+        layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, obj))
+        assert layout.setting_before(layout.index("prop", light, "shadow_soft_size"), "active") is False
+        assert any("only the Cycles emulation uses the Radius" in text for text in layout.texts())
+
+
 def test_menus_and_ui_list_draw(registered):
     scene, volume, material, lights = _scene_with_everything()
     context = SimpleNamespace(spectral_spectrum=lights[0].data.spectral.spectrum)
@@ -127,6 +142,27 @@ def test_material_preset_sets_everything_and_resets_the_rest(registered):
         bpy.ops.spectral.apply_material_preset(preset="HAZE")
     assert settings.phase == "rayleigh" and settings.extinction.source == "CURVE"
     assert curves.points(curves.find_mapping(settings.extinction.curve))[0] == pytest.approx((360.0, 1.0))
+
+
+def test_light_preset_keeps_the_wavelength_window(registered):
+    spectrum = bpy.data.lights.new("UV Lamp", "SPOT").spectral.spectrum
+    spectrum.use_window, spectrum.window_min, spectrum.window_max = True, 275.0, 450.0
+    spectrum.source = "BLACKBODY"
+    presets.apply(spectrum, presets.LIGHT_PRESETS["TUNGSTEN"][1])
+    assert (spectrum.source, spectrum.illuminant, spectrum.temperature) == ("ILLUMINANT", "A", 5500.0)
+    assert spectrum.use_window and (spectrum.window_min, spectrum.window_max) == (275.0, 450.0)
+
+
+def test_spectrum_files_may_be_blend_relative(registered, tmp_path):
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "scene.blend"))
+    csv = tmp_path / "lamp.csv"
+    csv.write_text("400,1\n700,2\n")
+    spectrum = bpy.data.lights.new("Lamp", "POINT").spectral.spectrum
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # Blender warns about "//" paths on properties that do not allow them
+        assert bpy.ops.spectral.import_spectrum_csv(filepath=str(csv), **_target(spectrum)) == {"FINISHED"}
+        assert spectrum.filepath == "//lamp.csv"
+    assert to_spectrum(spectrum).values.max() == pytest.approx(2.0)
 
 
 def _target(settings):
@@ -202,3 +238,100 @@ def test_copied_material_can_make_its_curves_its_own(registered):
     assert copy.spectral.curve_group != material.spectral.curve_group and not curves.is_shared(material)
     curves.set_points(curves.find_mapping(copy.spectral.albedo.curve), (400, 700), (0.1, 0.2))
     assert curves.points(curves.find_mapping(material.spectral.albedo.curve))[0][1] == pytest.approx(0.9)
+
+
+def _counting(monkeypatch, module, name):
+    """Replace `module.name` by a wrapper that counts its calls; the list of calls."""
+    calls, original = [], getattr(module, name)
+
+    def wrapper(*args, **kwargs):
+        calls.append(args)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, wrapper)
+    return calls
+
+
+def _draw_light(scene, light_object):
+    return draw(bpy.types.SPECTRAL_PT_light, _context(scene, light_object))
+
+
+def test_redraws_reuse_spectra_by_content(registered, tmp_path, monkeypatch):
+    from addon.tracer import spectra
+
+    scene, _volume, _material, lights = _scene_with_everything()
+    spectrum = lights[0].data.spectral.spectrum
+    csv = tmp_path / "lamp.csv"
+    csv.write_text("".join(f"{nm},{1 + nm / 1000}\n" for nm in range(300, 800)))
+    spectrum.source, spectrum.filepath = "CSV", str(csv)
+    reads = _counting(monkeypatch, spectra, "from_csv")
+    for _redraw in range(3):
+        _draw_light(scene, lights[0])
+    assert len(reads) == 1
+    os.utime(csv, ns=(csv.stat().st_atime_ns, csv.stat().st_mtime_ns + 10**9))  # the file changed
+    _draw_light(scene, lights[0])
+    assert len(reads) == 2
+    samples = _counting(monkeypatch, curves, "sample")
+    spectrum.source = "CURVE"
+    for _redraw in range(3):
+        _draw_light(scene, lights[0])
+    assert len(samples) == 1
+    curves.find_mapping(spectrum.curve).curves[0].points[0].location = (3.0, 0.2)
+    _draw_light(scene, lights[0])
+    assert len(samples) == 2
+
+
+def test_redraws_never_recover_spectra_from_colours(registered, monkeypatch):
+    from addon.tracer import spectra
+
+    def refuse(*_args, **_kwargs):
+        raise AssertionError("RGB → spectrum recovery while drawing")
+
+    scene, volume, material, lights = _scene_with_everything()
+    lights[0].data.spectral.spectrum.source = material.spectral.albedo.source = "COLOR"
+    lights[0].data.spectral.spectrum.color = material.spectral.albedo.color = (0.8, 0.2, 0.1)
+    monkeypatch.setattr(spectra, "from_rgb", refuse)
+    _draw_light(scene, lights[0])
+    for panel in _classes(bpy.types.Panel):
+        context = _context(scene, volume, material)
+        if not hasattr(panel, "poll") or panel.poll(context):
+            draw(panel, context)
+    np.testing.assert_allclose(material.spectral.albedo.preview, (0.8, 0.2, 0.1), atol=1e-6)
+    np.testing.assert_allclose(lights[0].data.spectral.spectrum.preview, (1.0, 0.25, 0.125), atol=1e-6)
+    monkeypatch.undo()  # once computed (by a render), the swatch is the spectrum's own colour
+    to_spectrum(material.spectral.albedo)
+    np.testing.assert_allclose(material.spectral.albedo.preview, (0.8, 0.2, 0.1), atol=0.02)
+
+
+def test_panels_follow_blender_layout_and_show_under_this_engine_only(registered):
+    from addon.ui.panel import SpectralPanel
+
+    scene, volume, material, lights = _scene_with_everything()
+    panels = _classes(bpy.types.Panel)
+    assert all(issubclass(panel, SpectralPanel) and panel.COMPAT_ENGINES == {ENGINE_ID} for panel in panels)
+    for obj in (volume, lights[0]):
+        context = _context(scene, obj, material if obj is volume else None)
+        for panel in panels:
+            if panel.poll(context):
+                layout = draw(panel, context)
+                assert layout.calls[:2] == [("set", ("use_property_split", True), {}),
+                                            ("set", ("use_property_decorate", True), {})]
+    scene.render.engine = "CYCLES"
+    context = _context(scene, volume, material)
+    assert not any(panel.poll(context) for panel in panels)  # the sidebar tab too
+
+
+def test_labels_are_ready_for_translation():
+    """Blender translates a label by its text: one built by an f-string has no translatable msgid (build it
+    from `iface_("...").format(...)` and pass translate=False)."""
+    import ast
+    from pathlib import Path
+
+    import addon.ui
+
+    found = []
+    for path in Path(addon.ui.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.keyword) and node.arg == "text" and isinstance(node.value, ast.JoinedStr):
+                found.append(f"{path.name}:{node.value.lineno}")
+    assert found == []
