@@ -16,22 +16,33 @@ from .errors import SpectralError
 from .shared_math import shared
 
 INV_FOUR_PI = 1.0 / (4.0 * np.pi)
+# |g| beyond this is refused. The lobe of HG is about 1 − |g| radians wide and peaks at
+# (1 + |g|) / (4π (1 − |g|)²): at 1 − 1e-6 that is 1.6e11 per steradian, and cosθ near 1 still resolves
+# the lobe in float64 (steps of 1.5e-8 rad). Closer to 1 the lobe falls between representable cosines
+# and single samples carry absurd weights (at 1 − 1e-10, NaN pixels before the pdf was made stable).
+HG_G_LIMIT = 1.0 - 1e-6
 
 
 def validate_g(values, name="Henyey–Greenstein anisotropy g"):
-    """`values` as a float64 array, or SpectralError unless every value lies strictly inside (−1, 1)."""
+    """`values` as a float64 array, or SpectralError unless every |g| is at most HG_G_LIMIT."""
     g = np.asarray(values, dtype=np.float64)
-    bad = ~(np.abs(g) < 1.0)  # also catches NaN
+    bad = ~(np.abs(g) <= HG_G_LIMIT)  # also catches NaN
     if np.any(bad):
-        raise SpectralError(f"{name} must lie strictly between -1 and 1, got {g[bad].flat[0]:g}")
+        raise SpectralError(f"{name}: |g| must be at most {HG_G_LIMIT!r} (a sharper lobe than float64 "
+                            f"directions resolve), got {g[bad].flat[0]:.12g}")
     return g
 
 
 @shared
 def hg_pdf(g, cos_theta):
-    """Henyey–Greenstein phase function (1 − g²) / (4π (1 + g² − 2g cosθ)^{3/2}), per steradian."""
-    denom = 1.0 + g * g - 2.0 * g * cos_theta
-    return INV_FOUR_PI * (1.0 - g * g) / (denom * np.sqrt(denom))
+    """Henyey–Greenstein phase function (1 − g²) / (4π (1 + g² − 2g cosθ)^{3/2}), per steradian.
+
+    With a = |g| and s = sign(g) the denominator is written (1 − a)² + 2a (1 − s cosθ), a sum of two
+    non-negative terms: the textbook form cancels to zero or below near the forward peak as |g| → 1."""
+    a = np.abs(g)
+    one_minus_a = 1.0 - a
+    denom = one_minus_a * one_minus_a + 2.0 * a * (1.0 - np.copysign(1.0, g) * cos_theta)
+    return INV_FOUR_PI * one_minus_a * (1.0 + a) / (denom * np.sqrt(denom))
 
 
 @shared

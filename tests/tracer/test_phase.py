@@ -175,8 +175,22 @@ def test_numba_and_numpy_forms_agree():
 def test_validate_g():
     assert np.array_equal(phase.validate_g([-0.99, 0.0, 0.5]), [-0.99, 0.0, 0.5])
     assert phase.validate_g(0.3).shape == ()
-    for bad in (1.0, -1.0, 1.5, np.nan, [0.2, 0.3, -1.2]):
-        with pytest.raises(SpectralError, match="strictly between -1 and 1"):
+    assert phase.validate_g(-phase.HG_G_LIMIT) == -phase.HG_G_LIMIT
+    for bad in (1.0, -1.0, 1.5, np.nan, [0.2, 0.3, -1.2], 0.9999999999):
+        with pytest.raises(SpectralError, match="must be at most 0.999999"):
             phase.validate_g(bad)
     with pytest.raises(SpectralError, match=r"anisotropy of 'smoke'.*got 1\.2"):
         phase.validate_g([0.1, 1.2], name="anisotropy of 'smoke'")
+
+
+@pytest.mark.parametrize("g", [phase.HG_G_LIMIT, -phase.HG_G_LIMIT, 1 - 1e-10, -(1 - 1e-10)])
+def test_hg_pdf_is_accurate_at_its_peak_as_g_nears_one(g):
+    """At the peak (cosθ = sign g) the pdf is (1 + |g|) / (4π (1 − |g|)²); the textbook denominator
+    1 + g² − 2g cosθ cancels there (relative error 1e-4 at 1 − 1e-6, NaN or inf at 1 − 1e-10)."""
+    a = abs(g)
+    peak = (1 + a) / (4 * np.pi * (1 - a) ** 2)
+    cos_peak = np.copysign(1.0, g)
+    assert phase.hg_pdf(g, cos_peak) == pytest.approx(peak, rel=1e-12)
+    cos_theta = phase.hg_sample_cos(g, np.random.default_rng(17).random(10_000))
+    values = phase.hg_pdf(g, np.append(cos_theta, [-1.0, 1.0]))
+    assert np.all(np.isfinite(values)) and np.all(values > 0)
