@@ -7,30 +7,19 @@ The kernel-facing functions are plain arithmetic on NumPy ufuncs, without branch
 backend calls them on arrays of paths, and they compile unchanged inside Numba kernels (`shared_math.shared`)
 in a kernel) for one path's scalars. A direction is anything indexable by component, `w[0], w[1], w[2]`:
 a (3,) array or a 3-tuple for one path, a (3, m) array for m paths; directions are returned as 3-tuples
-(of scalars, or of (m,) arrays). `validate_g` checks anisotropy values before they reach a kernel.
+(of scalars, or of (m,) arrays).
 """
 
 import numpy as np
 
-from .errors import SpectralError
 from .shared_math import shared
 
 INV_FOUR_PI = 1.0 / (4.0 * np.pi)
-# |g| beyond this is refused. The lobe of HG is about 1 − |g| radians wide and peaks at
+# |g| beyond this is refused (`scene.Scene.validate`). The lobe of HG is about 1 − |g| radians wide and peaks at
 # (1 + |g|) / (4π (1 − |g|)²): at 1 − 1e-6 that is 1.6e11 per steradian, and cosθ near 1 still resolves
 # the lobe in float64 (steps of 1.5e-8 rad). Closer to 1 the lobe falls between representable cosines
 # and single samples carry absurd weights (at 1 − 1e-10, NaN pixels before the pdf was made stable).
 HG_G_LIMIT = 1.0 - 1e-6
-
-
-def validate_g(values, name="Henyey–Greenstein anisotropy g"):
-    """`values` as a float64 array, or SpectralError unless every |g| is at most HG_G_LIMIT."""
-    g = np.asarray(values, dtype=np.float64)
-    bad = ~(np.abs(g) <= HG_G_LIMIT)  # also catches NaN
-    if np.any(bad):
-        raise SpectralError(f"{name}: |g| must be at most {HG_G_LIMIT!r} (a sharper lobe than float64 "
-                            f"directions resolve), got {g[bad].flat[0]:.12g}")
-    return g
 
 
 @shared

@@ -172,17 +172,6 @@ def test_numba_and_numpy_forms_agree():
     assert as_tuple == direction_jit(np.array([0.0, 0.0, 1.0]), 0.5, 0.25)
 
 
-def test_validate_g():
-    assert np.array_equal(phase.validate_g([-0.99, 0.0, 0.5]), [-0.99, 0.0, 0.5])
-    assert phase.validate_g(0.3).shape == ()
-    assert phase.validate_g(-phase.HG_G_LIMIT) == -phase.HG_G_LIMIT
-    for bad in (1.0, -1.0, 1.5, np.nan, [0.2, 0.3, -1.2], 0.9999999999):
-        with pytest.raises(SpectralError, match="must be at most 0.999999"):
-            phase.validate_g(bad)
-    with pytest.raises(SpectralError, match=r"anisotropy of 'smoke'.*got 1\.2"):
-        phase.validate_g([0.1, 1.2], name="anisotropy of 'smoke'")
-
-
 @pytest.mark.parametrize("g", [phase.HG_G_LIMIT, -phase.HG_G_LIMIT, 1 - 1e-10, -(1 - 1e-10)])
 def test_hg_pdf_is_accurate_at_its_peak_as_g_nears_one(g):
     """At the peak (cosθ = sign g) the pdf is (1 + |g|) / (4π (1 − |g|)²); the textbook denominator

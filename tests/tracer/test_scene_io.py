@@ -201,9 +201,10 @@ BAD = [
     ("media[0].albedo", {"densities": [0], "spectra": [0.5], "mode": 1}, ["media[0].albedo: unknown field 'mode'"]),
     ("media[0].albedo", {"densities": [-1], "spectra": [0.5]},
      ["media[0].albedo.densities[0]: must be within [0, inf]"]),
-    ("media[0].anisotropy", 1.0, ["media[0].anisotropy: |g| must be below 1, found 1 at"]),
+    ("media[0].anisotropy", 1.0, ["media[0].anisotropy: |g| must be at most 0.999999", "found 1 at"]),
     ("media[0].anisotropy", {"type": "table", "wavelengths": [400, 700], "values": [0, -1.2]},
-     ["media[0].anisotropy: |g| must be below 1, found -1.2 at 700 nm"]),
+     ["media[0].anisotropy: |g| must be at most 0.999999", "found -1.2 at 700 nm"]),
+    ("media[0].anisotropy", 0.9999999999, ["media[0].anisotropy: |g| must be at most", "found 0.9999999999 at"]),
     ("media[0].extinction", -0.5, ["media[0].extinction: extinction must not be negative, found -0.5"]),
     ("media[0].extinction", {"type": "sparkle"}, ["media[0].extinction", "'sparkle'"]),
     ("media[0].extinction", {"type": "gaussian", "peak": "blue", "width": 10}, ["media[0].extinction"]),
@@ -348,3 +349,61 @@ def test_any_wrong_value_anywhere_is_a_spectral_error(write_scene, junk):
             load_scene(write_scene(data))
         except SpectralError:
             pass
+
+
+# ---------------------------------------------------------------------------------------------- Scene.validate
+
+
+INVALID_SCENES = {
+    # what: (change to the full scene, words of the message)
+    "albedo above 1": (lambda s: _medium(s, albedo_table=np.full((1, GRID.size), 1.5), albedo_densities=np.zeros(1)),
+                       "media[0].albedo: albedo must be within [0, 1], found 1.5"),
+    "g above 1": (lambda s: _medium(s, anisotropy=spectra.constant(1.2)), "media[0].anisotropy: |g| must be at most"),
+    "phase": (lambda s: _medium(s, phase="mie"), "media[0].phase: unknown value 'mie'"),
+    "no lights": (lambda s: dataclasses.replace(s, lights=(), media=(dataclasses.replace(s.media[0], emission=None),)),
+                  "lights: the scene has no lights"),
+    "dark lights": (lambda s: dataclasses.replace(s, lights=tuple(dataclasses.replace(light, strength=0.0)
+                                                                  for light in s.lights)),
+                    "lights: every light has strength 0"),
+    "light kind": (lambda s: dataclasses.replace(s, lights=(dataclasses.replace(s.lights[0], kind="area"),)),
+                   "lights[0].kind: unknown value 'area'"),
+    "zero light": (lambda s: dataclasses.replace(s, lights=(dataclasses.replace(s.lights[0],
+                                                                                spectrum=spectra.constant(0.0)),)),
+                   "lights[0].spectrum: the light's spectrum is zero everywhere"),
+    "no excitation": (lambda s: _medium(s, fluorescence=dataclasses.replace(s.media[0].fluorescence,
+                                                                              excitation=spectra.constant(0.0))),
+                      "media[0].fluorescence.excitation: the excitation spectrum is zero everywhere"),
+    "3 wavelengths": (lambda s: _settings(s, wavelengths_per_path=3), "render.wavelengths_per_path: must be 1 or 4"),
+    "seed": (lambda s: _settings(s, seed=2**64), "render.seed: must be at most 18446744073709551615"),
+    "backend": (lambda s: _settings(s, backend="cuda"), "render.backend: unknown value 'cuda'"),
+    "fov": (lambda s: dataclasses.replace(s, camera=dataclasses.replace(s.camera, fov=np.pi)),
+            "camera.fov: must be within (0, 180), found 180"),
+}
+
+
+def _medium(scene, **changes):
+    return dataclasses.replace(scene, media=(dataclasses.replace(scene.media[0], **changes), *scene.media[1:]))
+
+
+def _settings(scene, **changes):
+    return dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, **changes))
+
+
+def test_a_valid_scene_validates_to_itself():
+    scene = full_scene()
+    assert scene.validate() is scene
+
+
+@pytest.mark.parametrize("case", INVALID_SCENES)
+def test_one_validation_for_load_save_and_compile(tmp_path, case):
+    """A Scene built in code is checked by the rules of the file format: compile and save refuse it (and save
+    writes nothing), so nothing can write a scene file that load_scene refuses."""
+    from addon.tracer.compile import compile_scene
+
+    change, words = INVALID_SCENES[case]
+    scene = change(full_scene())
+    for action in (scene.validate, lambda: compile_scene(scene), lambda: save_scene(scene, tmp_path / "out")):
+        with pytest.raises(SpectralError) as error:
+            action()
+        assert words in str(error.value)
+    assert not (tmp_path / "out").exists()
