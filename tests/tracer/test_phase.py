@@ -183,3 +183,16 @@ def test_hg_pdf_is_accurate_at_its_peak_as_g_nears_one(g):
     cos_theta = phase.hg_sample_cos(g, np.random.default_rng(17).random(10_000))
     values = phase.hg_pdf(g, np.append(cos_theta, [-1.0, 1.0]))
     assert np.all(np.isfinite(values)) and np.all(values > 0)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+@pytest.mark.parametrize("g", [phase.HG_G_LIMIT, -phase.HG_G_LIMIT])
+def test_the_sharpest_allowed_lobe_renders_finite_pixels(backend, g):
+    """At 1 − 1e-10 both backends rendered NaN pixels (issue 14); at the bound the image is finite."""
+    from addon.tracer.render import render
+    from tests.support import scenes as s
+
+    medium = s.medium(s.box_grid(), scale=3.0, albedo=0.9, g=g)
+    scene = s.scene(s.perspective_camera(16, 16), [medium], [s.environment(), s.sun([0, 0, 1])], spp=4)
+    xyz = render(scene, backend=backend).film.xyz
+    assert np.all(np.isfinite(xyz)) and xyz.mean() > 0
