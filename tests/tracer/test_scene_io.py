@@ -267,6 +267,11 @@ BAD = [
     ("render", {"lambda_min": 500, "lambda_max": 500}, ["render: the wavelength range 500–500 nm is empty"]),
     ("render.bands", 0, ["render.bands: must be at least 1, found 0"]),
     ("render.wavelengths_per_path", 2, ["render.wavelengths_per_path: must be 1 or 4, found 2"]),
+    ("render.seed", 2**64, ["render.seed: must be at most 18446744073709551615"]),
+    ("media[0].extinction", 10**400, ["media[0].extinction: the number (about 401 digits) is too large"]),
+    ("media[0].density_scale", 10**400, ["media[0].density_scale: expected a finite number, found 1000"]),
+    ("media[0].extinction", {"type": "gaussian", "peak": 550, "width": 50, "heigth": 0.5},
+     ["media[0].extinction: unknown field 'heigth' in a spectrum of type 'gaussian'"]),
 ]
 
 
@@ -302,7 +307,10 @@ def test_bad_grid_contents_are_named_with_the_json_path(write_scene, scene_data,
         ('{"format": 1, "format": 2}', ["'format' appears twice"]),
         ("[1, 2]", ["scene: expected an object"]),
         (b"\xff\xfe\x00", ["cannot be read"]),
+        ("[" * 100_000 + "]" * 100_000, ["nests its lists and objects too deeply"]),
+        ('{"format": ' + "7" * 5000 + "}", ["cannot be read as JSON", "5000 digits"]),
     ],
+    ids=["truncated", "NaN", "duplicate key", "not an object", "not UTF-8", "nested 100000 deep", "5000 digits"],
 )
 def test_unreadable_scene_files(tmp_path, text, words):
     path = tmp_path / "scene.json"
