@@ -30,6 +30,10 @@ WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "c
 WAVELENGTHS_PER_PATH = (1, 4)  # the hero alone, or the hero and 3 rotated wavelengths (spectral MIS)
 BACKENDS = ("numba", "numpy")
 SEED_MAX = 2**64 - 1  # seeds are unsigned 64-bit integers in the kernels' random streams
+# Delta and ratio tracking take about one step per unit of optical depth (through the majorant) along a
+# ray, so a medium far thicker than this renders for hours and cannot be interrupted mid-ray. It is also
+# far beyond anything visible: light through optical depth 30 is dimmed by e⁻³⁰ ≈ 1e-13.
+MAX_OPTICAL_DEPTH = 1e5
 
 
 @dataclass(frozen=True, eq=False)
@@ -207,10 +211,31 @@ def _check_medium(medium: Medium, where: str) -> None:
     checks.spectrum_within(medium.anisotropy.values, f"{where}.anisotropy",
                            f"|g| must be at most {HG_G_LIMIT!r} (sharper lobes are not resolved by float64 directions)", -HG_G_LIMIT, HG_G_LIMIT)
     checks.one_of(medium.phase, f"{where}.phase", PHASES)
+    _check_optical_depth(medium, where)
     if medium.fluorescence is not None:
         _check_fluorescence(medium.fluorescence, f"{where}.fluorescence")
     if medium.emission is not None:
         _check_emission(medium.emission, f"{where}.emission")
+
+
+def optical_depth(medium: Medium) -> float:
+    """An upper bound of the optical depth along any straight path through the medium: its largest
+    extinction coefficient (with fluorescent absorption) times the diagonal of its grid's world box."""
+    extinction = medium.extinction.values
+    if medium.fluorescence is not None:
+        extinction = extinction + medium.fluorescence.excitation.values
+    shape = np.array(medium.density.values.shape, dtype=np.float64)
+    diagonal = float(np.linalg.norm(np.asarray(medium.density.index_to_world, dtype=np.float64)[:3, :3] @ shape))
+    return float(medium.density_scale * extinction.max() * medium.density.values.max()) * diagonal
+
+
+def _check_optical_depth(medium: Medium, where: str) -> None:
+    depth = optical_depth(medium)
+    if not depth <= MAX_OPTICAL_DEPTH:
+        raise SpectralError(
+            f"{where}: the optical depth through the medium reaches {depth:.3g} (density_scale × extinction × "
+            f"density × size), more than the {MAX_OPTICAL_DEPTH:g} the tracer accepts: tracking would take about "
+            f"that many steps per ray, and nothing shows through beyond ~30; lower density_scale or extinction")
 
 
 def _check_albedo(densities, table, where: str) -> None:

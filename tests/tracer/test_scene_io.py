@@ -268,6 +268,9 @@ BAD = [
     ("render.bands", 0, ["render.bands: must be at least 1, found 0"]),
     ("render.wavelengths_per_path", 2, ["render.wavelengths_per_path: must be 1 or 4, found 2"]),
     ("render.seed", 2**64, ["render.seed: must be at most 18446744073709551615"]),
+    ("media[0]", {"density": {"file": "density.npy", "index_to_world": np.eye(4).tolist()}, "density_scale": 1e6,
+                  "extinction": 1e6, "albedo": 0.9},
+     ["media[0]: the optical depth through the medium reaches 5.39e+12", "more than the 100000 the tracer accepts"]),
     ("media[0].extinction", 10**400, ["media[0].extinction: the number (about 401 digits) is too large"]),
     ("media[0].density_scale", 10**400, ["media[0].density_scale: expected a finite number, found 1000"]),
     ("media[0].extinction", {"type": "gaussian", "peak": 550, "width": 50, "heigth": 0.5},
@@ -384,6 +387,7 @@ INVALID_SCENES = {
     "3 wavelengths": (lambda s: _settings(s, wavelengths_per_path=3), "render.wavelengths_per_path: must be 1 or 4"),
     "seed": (lambda s: _settings(s, seed=2**64), "render.seed: must be at most 18446744073709551615"),
     "backend": (lambda s: _settings(s, backend="cuda"), "render.backend: unknown value 'cuda'"),
+    "optical depth": (lambda s: _medium(s, density_scale=1e12), "media[0]: the optical depth through the medium"),
     "fov": (lambda s: dataclasses.replace(s, camera=dataclasses.replace(s.camera, fov=np.pi)),
             "camera.fov: must be within (0, 180), found 180"),
 }
