@@ -20,6 +20,21 @@ def shown(value, limit: int = 80) -> str:
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
+_BYTE_UNITS = {"PiB": 2**50, "TiB": 2**40, "GiB": 2**30, "MiB": 2**20, "KiB": 2**10}
+
+
+def byte_size(count: int, unit: str | None = None) -> str:
+    """A number of bytes for people: "3.55 PiB", "281 KiB"; in `unit` ("GiB", ...) when given."""
+    if unit is None:
+        unit = next((name for name, scale in _BYTE_UNITS.items() if count >= scale), None)
+        if unit is None:
+            return f"{count} bytes"
+    if count >= 2**1000 or count / _BYTE_UNITS[unit] >= 1e15:  # integers from JSON have no size limit
+        return f"more than 1e15 {unit}"
+    value = count / _BYTE_UNITS[unit]
+    return f"{value:.3g} {unit}" if value < 1000 else f"{value:.0f} {unit}"
+
+
 def number(value, where: str) -> float:
     """A finite real number (JSON booleans are not numbers)."""
     try:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checks import shown
+from .checks import byte_size, shown
 from .errors import SpectralError
 from .scene import Grid
 
@@ -169,22 +169,15 @@ def _npy_header(path: Path, where: str) -> tuple[tuple[int, ...], np.dtype]:
     size = path.stat().st_size - data_start
     if size < stored:
         raise SpectralError(f"{where} cannot be read: it is truncated (its header promises "
-                            f"{'×'.join(map(str, shape))} values, {_size(stored)}; the file holds {_size(size)})")
+                            f"{'×'.join(map(str, shape))} values, {byte_size(stored)}; the file holds {byte_size(size)})")
     return shape, dtype
-
-
-def _size(count: int) -> str:
-    for unit, scale in (("PiB", 2**50), ("TiB", 2**40), ("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
-        if count >= scale:
-            return f"{count / scale:.3g} {unit}"
-    return f"{count} bytes"
 
 
 def _check_memory(needed: int, what: str) -> None:
     """SpectralError when `needed` bytes are more than the memory available now."""
     available = available_memory()
     if available is not None and needed > available:
-        raise SpectralError(f"{what} need {_size(needed)} of memory, more than the {_size(available)} available")
+        raise SpectralError(f"{what} need {byte_size(needed)} of memory, more than the {byte_size(available)} available")
 
 
 def _read_vdb(path: Path, grid_name: str | None, index_to_world):

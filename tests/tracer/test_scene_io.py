@@ -183,6 +183,7 @@ BAD = [
     ("camera.width", True, ["camera.width: expected a whole number"]),
     ("camera.width", 10**12, ["camera: a 1000000000000×6 film needs", "GiB of memory"]),
     ("camera.height", 10**11, ["camera: a 8×100000000000 film needs", "GiB"]),
+    ("camera.height", 10**120, ["camera: a 8×1000000000", "… film needs more than 1e15 GiB of memory"]),
     ("camera.kind", "fisheye", ["camera.kind", "'fisheye'", "perspective, orthographic"]),
     ("camera.fov", 180, ["camera.fov: must be within (0, 180)"]),
     ("camera.sensor_fit", "auto", ["camera.sensor_fit", "AUTO, HORIZONTAL, VERTICAL"]),
