@@ -118,11 +118,11 @@ def _camera(value, where: str) -> Camera:
         width=width,
         height=height,
         kind=data.get("kind", Camera.kind),
-        fov=float(np.radians(_float(data.get("fov", np.degrees(Camera.fov)), f"{where}.fov"))),
-        ortho_scale=_float(data.get("ortho_scale", Camera.ortho_scale), f"{where}.ortho_scale"),
+        fov=float(np.radians(checks.number(data.get("fov", np.degrees(Camera.fov)), f"{where}.fov"))),
+        ortho_scale=checks.number(data.get("ortho_scale", Camera.ortho_scale), f"{where}.ortho_scale"),
         sensor_fit=data.get("sensor_fit", Camera.sensor_fit),
-        shift_x=_float(data.get("shift_x", 0.0), f"{where}.shift_x"),
-        shift_y=_float(data.get("shift_y", 0.0), f"{where}.shift_y"),
+        shift_x=checks.number(data.get("shift_x", 0.0), f"{where}.shift_x"),
+        shift_y=checks.number(data.get("shift_y", 0.0), f"{where}.shift_y"),
     )
 
 
@@ -141,7 +141,7 @@ def _medium(value, where: str, folder: Path) -> Medium:
     return Medium(
         name=data.get("name", where),
         density=_grid(data["density"], f"{where}.density", folder),
-        density_scale=_float(data.get("density_scale", 1.0), f"{where}.density_scale"),
+        density_scale=checks.number(data.get("density_scale", 1.0), f"{where}.density_scale"),
         extinction=_spectrum(data["extinction"], f"{where}.extinction", folder),
         albedo_densities=densities,
         albedo_table=table,
@@ -180,7 +180,7 @@ def _albedo(value, where: str, folder: Path) -> tuple[np.ndarray, np.ndarray]:
                 f"{where}: densities and spectra must be two non-empty lists of equal length, "
                 f"found {len(levels)} and {len(spectra_)}"
             )
-        densities = np.array([_float(d, f"{where}.densities[{i}]") for i, d in enumerate(levels)])
+        densities = np.array([checks.number(d, f"{where}.densities[{i}]") for i, d in enumerate(levels)])
         rows = [_spectrum(s, f"{where}.spectra[{i}]", folder) for i, s in enumerate(spectra_)]
         return densities, np.stack([row.values for row in rows])
     return np.zeros(1), _spectrum(value, where, folder).values[np.newaxis, :].copy()
@@ -191,7 +191,7 @@ def _fluorescence(value, where: str, folder: Path) -> Fluorescence:
     return Fluorescence(
         excitation=_spectrum(data["excitation"], f"{where}.excitation", folder),
         emission=_spectrum(data["emission"], f"{where}.emission", folder),
-        quantum_yield=_float(data["quantum_yield"], f"{where}.quantum_yield"),
+        quantum_yield=checks.number(data["quantum_yield"], f"{where}.quantum_yield"),
     )
 
 
@@ -199,9 +199,9 @@ def _emission(value, where: str, folder: Path) -> BlackbodyEmission:
     data = _fields(value, where, _EMISSION)
     return BlackbodyEmission(
         temperature=_grid(data["temperature"], f"{where}.temperature", folder, nonnegative=False),
-        intensity=_float(data.get("intensity", 1.0), f"{where}.intensity"),
-        temperature_scale=_float(data.get("temperature_scale", 1.0), f"{where}.temperature_scale"),
-        temperature_offset=_float(data.get("temperature_offset", 0.0), f"{where}.temperature_offset"),
+        intensity=checks.number(data.get("intensity", 1.0), f"{where}.intensity"),
+        temperature_scale=checks.number(data.get("temperature_scale", 1.0), f"{where}.temperature_scale"),
+        temperature_offset=checks.number(data.get("temperature_offset", 0.0), f"{where}.temperature_offset"),
     )
 
 
@@ -216,7 +216,7 @@ def _light(value, where: str, folder: Path) -> Light:
     fields = {}
     if kind == "sun":
         fields["direction"] = _unit(data["direction"], f"{where}.direction")
-        fields["angle"] = float(np.radians(_float(data.get("angle", 0.0), f"{where}.angle")))
+        fields["angle"] = float(np.radians(checks.number(data.get("angle", 0.0), f"{where}.angle")))
     if kind == "sky" and "horizon_spectrum" in data:
         fields["horizon_spectrum"] = _spectrum(data["horizon_spectrum"], f"{where}.horizon_spectrum", folder)
     if kind in ("point", "spot"):
@@ -224,10 +224,10 @@ def _light(value, where: str, folder: Path) -> Light:
     if kind == "spot":
         fields["spot_direction"] = _unit(data["spot_direction"], f"{where}.spot_direction")
         size = data.get("spot_size", np.degrees(Light.spot_size))
-        fields["spot_size"] = float(np.radians(_float(size, f"{where}.spot_size")))
-        fields["spot_blend"] = _float(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend")
+        fields["spot_size"] = float(np.radians(checks.number(size, f"{where}.spot_size")))
+        fields["spot_blend"] = checks.number(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend")
     return Light(kind=kind, spectrum=_spectrum(data["spectrum"], f"{where}.spectrum", folder),
-                 strength=_float(data.get("strength", 1.0), f"{where}.strength"), name=data.get("name", ""),
+                 strength=checks.number(data.get("strength", 1.0), f"{where}.strength"), name=data.get("name", ""),
                  **fields)
 
 
@@ -236,7 +236,7 @@ def _render(value, where: str) -> RenderSettings:
     defaults = RenderSettings()
     values = {key: data.get(key, getattr(defaults, key)) for key in _RENDER["optional"]}
     for key in ("lambda_min", "lambda_max"):
-        values[key] = _float(values[key], f"{where}.{key}")
+        values[key] = checks.number(values[key], f"{where}.{key}")
     return RenderSettings(**values)
 
 
@@ -261,10 +261,6 @@ def _list(value, where: str) -> list:
     if not isinstance(value, list):
         raise SpectralError(f"{where}: expected a list, found {shown(value)}")
     return value
-
-
-def _float(value, where: str) -> float:
-    return checks.number(value, where)
 
 
 def _unit(value, where: str) -> np.ndarray:
