@@ -88,7 +88,10 @@ def write_all(outputs: list[Output]) -> list[Path]:
             except SpectralError as problem:
                 raise SpectralError(f"cannot write {path}: {problem}") from None
         for temporary, output in zip(staged, outputs):
-            os.replace(temporary, output.path)
+            try:
+                os.replace(temporary, output.path)
+            except OSError as problem:  # rare after a successful write in the same folder
+                raise SpectralError(f"cannot write {output.path}: {problem.strerror or problem}") from None
         done = True
     finally:
         for temporary in staged:
