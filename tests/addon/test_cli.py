@@ -57,3 +57,21 @@ def test_an_unwritable_output_is_refused_before_rendering(blend, tmp_path):
     (tmp_path / "file").write_text("x")
     done = run_cli(blend, "--out", tmp_path / "file" / "out.exr", "--quiet")
     assert done.returncode == 1 and "is a file, not a folder" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_an_albedo_csv_above_one_is_refused_by_the_scene_rules(registered, tmp_path):
+    """The add-on's CSV albedo was never checked (issue 14): the exported scene now meets Scene.validate
+    before it is rendered or saved."""
+    from addon.export.scene import export_scene
+    from addon.tracer.compile import compile_scene
+    from addon.tracer.errors import SpectralError
+    from tests.addon.builders import basic_scene
+
+    _scene, cloud = basic_scene(tmp_path)
+    table = tmp_path / "albedo.csv"
+    table.write_text("250,0.5\n550,1.5\n830,0.5\n")
+    albedo = cloud.material_slots[0].material.spectral.albedo
+    albedo.source, albedo.filepath = "CSV", str(table)
+    exported = export_scene(bpy.context.evaluated_depsgraph_get()).scene
+    with pytest.raises(SpectralError, match=r"media\[0\]\.albedo: albedo must be within \[0, 1\], found 1.5 at 550 nm"):
+        compile_scene(exported)
