@@ -209,12 +209,19 @@ def _probe(address: str, timeout: float) -> None:
                             f"({type(problem).__name__}: {problem}); is it a Dask scheduler?") from None
 
 
+def _ctrl_c_is_keyboard_interrupt() -> bool:
+    """Whether this is the main thread of a process where Ctrl-C raises KeyboardInterrupt (a command line),
+    the only case where the helpers below change and restore the SIGINT handler (not inside Blender)."""
+    return (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+
+
 @contextmanager
 def _children_ignore_ctrl_c():
     """Processes started inside ignore SIGINT (inherited through exec): Ctrl-C in a terminal reaches every
     process of its group, and local workers dying of it at once flood stderr with hundreds of tracebacks.
     This process still gets it and closes the farm, which stops them."""
-    if threading.current_thread() is not threading.main_thread():  # only the main thread may set handlers
+    if not _ctrl_c_is_keyboard_interrupt():
         yield
         return
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -228,7 +235,7 @@ def _children_ignore_ctrl_c():
 def _ctrl_c_sets(flag: list):
     """Inside, Ctrl-C (SIGINT) appends to `flag` instead of raising KeyboardInterrupt at an arbitrary point
     (inside a Dask call it leaves the client broken and its closing floods stderr with tracebacks)."""
-    if threading.current_thread() is not threading.main_thread():
+    if not _ctrl_c_is_keyboard_interrupt():
         yield
         return
     previous = signal.signal(signal.SIGINT, lambda _signum, _frame: flag.append(True))

@@ -1,5 +1,6 @@
 """The .blend command line (`python -m addon.cli render`): files that are not blend files and frames
-Blender does not have are bad input (exit 1, a message, nothing written), not tracebacks or clamped frames."""
+Blender does not have are bad input (exit 1, a message, nothing written), not tracebacks or clamped frames;
+and what the add-on exports obeys the scene's rules before it is rendered."""
 
 import subprocess
 import sys
