@@ -12,7 +12,8 @@ import numpy as np
 from . import colorimetry, sampling
 from .errors import SpectralError
 from .majorant import block_size_for, majorant_grid
-from .scene import CAMERA_KINDS as CAMERAS, LIGHT_KINDS as LIGHTS, PHASES, WAVELENGTHS_PER_PATH, Grid, Light, Medium, Scene
+from .scene import CAMERA_KINDS as CAMERAS, LIGHT_KINDS as LIGHTS, PHASES, WAVELENGTHS_PER_PATH
+from .scene import Grid, Light, Medium, Scene
 from .spectra import Spectrum
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 

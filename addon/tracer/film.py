@@ -29,8 +29,8 @@ def check_film_memory(width: int, height: int, bands: int = 1) -> None:
     needed = film_bytes(width, height, bands)
     available = available_memory()
     if available is not None and needed > available:
-        raise SpectralError(f"a {shown(width, 24)}×{shown(height, 24)} film needs {byte_size(needed, "GiB")} of memory "
-                            f"({bands} band(s)), but only {byte_size(available, 'GiB')} is available")
+        raise SpectralError(f"a {shown(width, 24)}×{shown(height, 24)} film needs {byte_size(needed, 'GiB')} of "
+                            f"memory ({bands} band(s)), but only {byte_size(available, 'GiB')} is available")
 
 
 class Film:

@@ -169,7 +169,8 @@ def _npy_header(path: Path, where: str) -> tuple[tuple[int, ...], np.dtype]:
     size = path.stat().st_size - data_start
     if size < stored:
         raise SpectralError(f"{where} cannot be read: it is truncated (its header promises "
-                            f"{'×'.join(map(str, shape))} values, {byte_size(stored)}; the file holds {byte_size(size)})")
+                            f"{'×'.join(map(str, shape))} values, {byte_size(stored)}; the file holds "
+                            f"{byte_size(size)})")
     return shape, dtype
 
 
@@ -177,7 +178,8 @@ def _check_memory(needed: int, what: str) -> None:
     """SpectralError when `needed` bytes are more than the memory available now."""
     available = available_memory()
     if available is not None and needed > available:
-        raise SpectralError(f"{what} need {byte_size(needed)} of memory, more than the {byte_size(available)} available")
+        raise SpectralError(f"{what} need {byte_size(needed)} of memory, "
+                            f"more than the {byte_size(available)} available")
 
 
 def _read_vdb(path: Path, grid_name: str | None, index_to_world):

@@ -209,7 +209,8 @@ def _check_medium(medium: Medium, where: str) -> None:
                            0.0, np.inf)
     _check_albedo(medium.albedo_densities, medium.albedo_table, f"{where}.albedo")
     checks.spectrum_within(medium.anisotropy.values, f"{where}.anisotropy",
-                           f"|g| must be at most {HG_G_LIMIT!r} (sharper lobes are not resolved by float64 directions)", -HG_G_LIMIT, HG_G_LIMIT)
+                           f"|g| must be at most {HG_G_LIMIT!r} (sharper lobes are not resolved by float64 directions)",
+                           -HG_G_LIMIT, HG_G_LIMIT)
     checks.one_of(medium.phase, f"{where}.phase", PHASES)
     _check_optical_depth(medium, where)
     if medium.fluorescence is not None:

@@ -61,7 +61,8 @@ def load_scene(path) -> Scene:
     if data["format"] != FORMAT:
         raise SpectralError(f"format: expected {FORMAT!r}, found {shown(data['format'])} (is {path} a scene file?)")
     if data["version"] != VERSION:
-        raise SpectralError(f"version: this tracer reads version {VERSION} of the format, found {shown(data['version'])}")
+        raise SpectralError(f"version: this tracer reads version {VERSION} of the format, "
+                            f"found {shown(data['version'])}")
     folder = path.parent
     camera = _camera(data["camera"], "camera")
     media = tuple(_medium(spec, f"media[{i}]", folder) for i, spec in enumerate(_list(data.get("media", []), "media")))
