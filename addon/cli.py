@@ -3,8 +3,9 @@
     python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N] [--spp N] [--scheduler ADDRESS]
     blender -c spectral_render FILE.blend --out OUT.exr [...]   (the same, with the extension installed)
 
-Blender command ids must be Python identifiers, hence `spectral_render`. Exit codes: 0 success,
-1 bad input (message on stderr, nothing written), 2 usage error, 130 interrupted.
+Blender command ids must be Python identifiers, hence `spectral_render`. Exit codes as the tracer's
+command line (`addon.tracer.cli`): 0 success, 1 bad input (message on stderr, nothing written),
+2 usage error, 70 internal error (a bug, with its traceback), 130 interrupted.
 """
 
 import argparse
@@ -12,7 +13,7 @@ import sys
 from pathlib import Path
 
 from .tracer import image_io
-from .tracer.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK, ProgressBar
+from .tracer.cli import EXIT_OK, ProgressBar, run_reporting
 from .tracer.errors import SpectralError
 
 COMMAND = "spectral_render"
@@ -41,7 +42,11 @@ def open_scene(blend: Path, scene_name: str | None = None):
 
     if not blend.is_file():
         raise SpectralError(f"blend file {blend} does not exist")
-    bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
+    try:
+        bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
+    except RuntimeError as problem:  # not a blend file, truncated, from a newer Blender...
+        reason = str(problem).strip().removeprefix("Error: ")
+        raise SpectralError(f"blend file {blend} cannot be opened: {reason}") from None
     if scene_name is not None:
         scene = bpy.data.scenes.get(scene_name)
         if scene is None:
@@ -58,8 +63,20 @@ def export_context_scene(frame: int | None = None):
     from .export.scene import export_scene
 
     if frame is not None:
+        check_frame(frame)
         bpy.context.scene.frame_set(frame)
     return export_scene(bpy.context.evaluated_depsgraph_get())
+
+
+def check_frame(frame: int) -> int:
+    """`frame`, or a SpectralError when it lies outside the frames Blender has (it would clamp it)."""
+    import bpy
+
+    limits = bpy.types.Scene.bl_rna.properties["frame_current"]
+    if not limits.hard_min <= frame <= limits.hard_max:
+        raise SpectralError(f"--frame: Blender's frames run from {limits.hard_min} to {limits.hard_max}, "
+                            f"found {frame}")
+    return frame
 
 
 def render_blend(args) -> str:
@@ -68,6 +85,9 @@ def render_blend(args) -> str:
 
     if args.spp is not None and args.spp < 1:
         raise SpectralError(f"--spp must be at least 1, got {args.spp}")
+    if args.frame is not None:
+        check_frame(args.frame)
+    image_io.check_destination(args.out, ".exr")
     scene = open_scene(args.blend, args.scene)
     export = export_context_scene(args.frame)
     settings = scene.spectral
@@ -100,15 +120,12 @@ def _emulate(scene, export, spp):
 
 def main(argv=None, prog="python -m addon.cli render") -> int:
     args = _parser(prog).parse_args(argv)
-    try:
+
+    def command():
         print(render_blend(args))
-    except SpectralError as problem:
-        print(f"error: {problem}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print("\ninterrupted: nothing written", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    return EXIT_OK
+        return EXIT_OK
+
+    return run_reporting(command)
 
 
 def _command(argv) -> int:

@@ -3,20 +3,25 @@
 `render --workers N` renders on N local Dask worker processes, `render --scheduler tcp://HOST:PORT` on
 a running Dask scheduler's workers (docs/distributed.md); the image is the same as without them.
 
-Exit codes: 0 success, 1 bad input (a SpectralError, message on stderr), 2 usage error,
-130 interrupted (Ctrl-C; nothing is written).
+Exit codes: 0 success, 1 bad input (a SpectralError, message on stderr; no file written or changed),
+2 usage error, 70 internal error (a bug: an unexpected exception, reported with its traceback; no file
+written or changed), 130 interrupted (Ctrl-C; nothing is written).
 """
 
 import argparse
 import json
+import math
 import sys
 import time
+import traceback
 from pathlib import Path
 
+from . import checks
 from .errors import SpectralError
 from .progress import TimeLeft
+from .scene import BACKENDS, SEED_MAX
 
-EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_CRASH, EXIT_INTERRUPTED = 0, 1, 2, 70, 130
 
 
 class ProgressBar:
@@ -57,7 +62,7 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--npy", type=Path, help="also write XYZ as a float32 .npy array (height, width, 3)")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
     render.add_argument("--seed", type=int, help="random seed (default: the scene's)")
-    render.add_argument("--backend", choices=("numba", "numpy"), help="kernel backend (default: the scene's)")
+    render.add_argument("--backend", choices=BACKENDS, help="kernel backend (default: the scene's)")
     render.add_argument("--threads", type=int, help="worker threads for the numba backend")
     render.add_argument("--stats", type=Path, help="write timing, samples per second and mean XYZ as JSON")
     render.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -75,11 +80,28 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _check_options(args) -> None:
+    """The render options' values and every output's destination, before any work is done."""
+    from . import image_io
+
+    for option, minimum in (("spp", 1), ("threads", 1), ("workers", 1), ("tile_size", 1)):
+        if getattr(args, option) is not None:
+            checks.whole_within(getattr(args, option), f"--{option.replace('_', '-')}", minimum)
+    if args.seed is not None:
+        checks.whole_within(args.seed, "--seed", 0, SEED_MAX)
+    if args.timeout is not None and not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise SpectralError(f"--timeout: must be a positive number of seconds, found {args.timeout:g}")
+    for path, suffix in ((args.out, ".exr"), (args.png, ".png"), (args.npy, ".npy"), (args.stats, None)):
+        if path is not None:
+            image_io.check_destination(path, suffix)
+
+
 def _render(args) -> int:
     from . import image_io
     from .render import render
     from .scene_io import load_scene
 
+    _check_options(args)
     scene = load_scene(args.scene)
     progress = None if args.quiet else ProgressBar()
     if args.scheduler is not None or args.workers is not None:
@@ -93,14 +115,14 @@ def _render(args) -> int:
         result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend, threads=args.threads,
                         progress=progress, notice=progress and progress.notice)
     film = result.film
-    image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
+    outputs = [image_io.exr(args.out, film.xyz, film.rgb(), film.variance)]
     if args.png:
-        image_io.write_png(args.png, film.rgb())
+        outputs.append(image_io.png(args.png, film.rgb()))
     if args.npy:
-        image_io.write_npy(args.npy, film.xyz)
+        outputs.append(image_io.npy(args.npy, film.xyz))
     if args.stats:
-        args.stats.parent.mkdir(parents=True, exist_ok=True)
-        args.stats.write_text(json.dumps(result.stats, indent=2))
+        outputs.append(image_io.text(args.stats, json.dumps(result.stats, indent=2)))
+    image_io.write_all(outputs)
     print(f"wrote {args.out} ({film.width}×{film.height}, {result.stats['samples_per_pixel']} spp, "
           f"{result.seconds:.1f} s, {result.stats['pixel_samples_per_second']:.0f} pixel-samples/s)")
     return EXIT_OK
@@ -120,11 +142,23 @@ def main(argv=None) -> int:
     if args.command == "render" and args.scheduler is None and args.workers is None:
         if args.tile_size is not None or args.timeout is not None:
             parser.error("--tile-size and --timeout apply to distributed renders: add --scheduler or --workers")
+    return run_reporting(lambda: _render(args) if args.command == "render" else _validate(args))
+
+
+def run_reporting(command) -> int:
+    """`command()`'s exit code, with every failure reported on stderr as its exit code says: bad input
+    (SpectralError) as a one-line message, an interruption, or anything else as an internal error."""
     try:
-        return _render(args) if args.command == "render" else _validate(args)
+        return command()
     except SpectralError as error:
         print(f"error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("\ninterrupted: nothing written", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Exception as error:  # noqa: BLE001 - a bug, reported as one
+        traceback.print_exc()
+        print(f"internal error: {type(error).__name__}: {error}\nThis is a bug in the spectral volume tracer, "
+              "not a problem with your input: please report it on the project's issue tracker with the "
+              "command line and the traceback above. Nothing was written.", file=sys.stderr)
+        return EXIT_CRASH

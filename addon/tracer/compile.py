@@ -12,14 +12,16 @@ import numpy as np
 from . import colorimetry, sampling
 from .errors import SpectralError
 from .majorant import block_size_for, majorant_grid
+from .scene import CAMERA_KINDS as CAMERAS, LIGHT_KINDS as LIGHTS, PHASES, WAVELENGTHS_PER_PATH
 from .scene import Grid, Light, Medium, Scene
 from .spectra import Spectrum
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
-LIGHT_KINDS = {"sun": 0, "environment": 1, "sky": 2, "point": 3, "spot": 4}
-PHASE_KINDS = {"hg": 0, "rayleigh": 1}
-CAMERA_KINDS = {"perspective": 0, "orthographic": 1}
-MAX_WAVELENGTHS_PER_PATH = 4
+# The kernels' integer codes of the scene's enumerations (numba_backend repeats them as literals).
+LIGHT_KINDS = {kind: code for code, kind in enumerate(LIGHTS)}
+PHASE_KINDS = {phase: code for code, phase in enumerate(PHASES)}
+CAMERA_KINDS = {kind: code for code, kind in enumerate(CAMERAS)}
+MAX_WAVELENGTHS_PER_PATH = max(WAVELENGTHS_PER_PATH)
 # Shadow rays whose every transmittance is below this play Russian roulette, stopping with this probability.
 SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
 
@@ -127,8 +129,6 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
             out["excitation"][index] = fluorescence.excitation.values
             total = fluorescence.excitation.integral()
             emission_total = fluorescence.emission.integral()
-            if total <= 0 or emission_total <= 0:
-                raise SpectralError(f"medium {medium.name!r}: fluorescence excitation and emission spectra must be non-zero")
             out["fluor_strength"][index] = fluorescence.quantum_yield * total
             out["emission_pdf"][index] = fluorescence.emission.values / emission_total
             excitation = sampling.from_spectrum(fluorescence.excitation, LAMBDA_MIN, LAMBDA_MAX)
@@ -193,8 +193,6 @@ def _scene_centre_and_radius(media) -> tuple[np.ndarray, float]:
 
 
 def _light_arrays(lights: tuple[Light, ...], media) -> dict:
-    if not lights and not any(medium.emission is not None for medium in media):
-        raise SpectralError("the scene has no lights: add a sun, environment, sky, point or spot light")
     centre, radius = _scene_centre_and_radius(media)
     count = len(lights)
     out = {
@@ -229,8 +227,6 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
                 cos_half = np.cos(0.5 * light.spot_size)
                 out["light_cos"][index] = cos_half
                 out["light_smooth"][index] = (1.0 - cos_half) * light.spot_blend
-    if count and power.sum() <= 0:
-        raise SpectralError("all lights have zero strength")
     out["light_pmf"] = power / power.sum() if count else power
     out["light_power"] = power
     return out
@@ -277,11 +273,9 @@ def default_band(settings) -> tuple[float, float]:
 
 
 def compile_scene(scene: Scene) -> KernelScene:
-    """The kernel data for the whole wavelength range; `with_band` restricts it to one band."""
-    settings = scene.settings
-    if not 1 <= settings.wavelengths_per_path <= MAX_WAVELENGTHS_PER_PATH:
-        raise SpectralError(f"wavelengths per path must be between 1 and {MAX_WAVELENGTHS_PER_PATH}, "
-                            f"got {settings.wavelengths_per_path}")
+    """The kernel data for the whole wavelength range of a valid scene (`Scene.validate`, called here);
+    `with_band` restricts it to one band."""
+    settings = scene.validate().settings
     media = _media_arrays(scene.media)
     lights = _light_arrays(scene.lights, scene.media)
     camera = scene.camera

@@ -15,22 +15,28 @@ schedulers and workers.
 """
 
 import asyncio
+import dataclasses
 import hashlib
 import logging
 import os
+import signal
+import threading
 import time
 import uuid
+from concurrent.futures import CancelledError
+from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
+from . import checks
 from . import render as single
 from .errors import SpectralError
 from .film import Film
 from .render import RenderResult, render_stats
-from .scene import Scene
+from .scene import Scene, check_settings
 
 DEFAULT_TIMEOUT = 10.0  # seconds to reach the scheduler and to wait for its first worker
 DEFAULT_TILE_SIZE = 64
@@ -206,6 +212,42 @@ def _probe(address: str, timeout: float) -> None:
                             f"({type(problem).__name__}: {problem}); is it a Dask scheduler?") from None
 
 
+def _ctrl_c_is_keyboard_interrupt() -> bool:
+    """Whether this is the main thread of a process where Ctrl-C raises KeyboardInterrupt (a command line),
+    the only case where the helpers below change and restore the SIGINT handler (not inside Blender)."""
+    return (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+
+
+@contextmanager
+def _children_ignore_ctrl_c():
+    """Processes started inside ignore SIGINT (inherited through exec): Ctrl-C in a terminal reaches every
+    process of its group, and local workers dying of it at once flood stderr with hundreds of tracebacks.
+    This process still gets it and closes the farm, which stops them."""
+    if not _ctrl_c_is_keyboard_interrupt():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextmanager
+def _ctrl_c_sets(flag: list):
+    """Inside, Ctrl-C (SIGINT) appends to `flag` instead of raising KeyboardInterrupt at an arbitrary point
+    (inside a Dask call it leaves the client broken and its closing floods stderr with tracebacks)."""
+    if not _ctrl_c_is_keyboard_interrupt():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, lambda _signum, _frame: flag.append(True))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def _local_cores() -> int:
     try:
         return len(os.sched_getaffinity(0))
@@ -225,7 +267,7 @@ class RenderFarm:
         if scheduler is not None and workers is not None:
             raise SpectralError("give either a scheduler address or a number of local workers, not both")
         distributed = _import_dask()
-        self.timeout = float(timeout)
+        self.timeout = checks.positive(checks.number(timeout, "the Dask time-out"), "the Dask time-out (seconds)")
         self.cluster = None
         self.client = None
         self.local_workers = None
@@ -240,10 +282,10 @@ class RenderFarm:
                     # samples their threads every 10 ms: switch it off (the workers inherit this).
                     import dask
 
-                    with dask.config.set({"distributed.worker.profile.enabled": False}):
+                    with dask.config.set({"distributed.worker.profile.enabled": False}), _children_ignore_ctrl_c():
                         self.cluster = distributed.LocalCluster(
                             n_workers=count, threads_per_worker=1, processes=True, host="127.0.0.1",
-                            dashboard_address=None, silence_logs=logging.ERROR)
+                            dashboard_address=None, silence_logs=logging.CRITICAL)
                 except Exception as problem:
                     raise SpectralError(
                         f"cannot start {count} local Dask worker processes ({problem}); a script that starts "
@@ -266,18 +308,22 @@ class RenderFarm:
     # -- lifetime
 
     def close(self) -> None:
-        """Disconnect (and stop the local cluster, if this farm started one)."""
+        """Disconnect (and stop the local cluster, if this farm started one).
+
+        Dask's log records are muted meanwhile: after a cancelled render, a local scheduler reports every
+        task it can no longer tell the departed client about, with a "Closed comm" traceback each."""
         client, cluster, self.client, self.cluster = self.client, self.cluster, None, None
-        if client is not None:
-            try:
-                client.close()
-            except Exception:
-                pass
-        if cluster is not None:
-            try:
-                cluster.close()
-            except Exception:
-                pass
+        muted = logging.root.manager.disable
+        logging.disable(logging.CRITICAL)
+        try:
+            for part in (client, cluster):
+                if part is not None:
+                    try:
+                        part.close()
+                    except Exception:
+                        pass
+        finally:
+            logging.disable(muted)
 
     def __enter__(self):
         return self
@@ -338,13 +384,11 @@ class RenderFarm:
 
         start = time.perf_counter()
         settings = scene.settings
-        spp = settings.spp if spp is None else int(spp)
-        seed = settings.seed if seed is None else int(seed)
+        spp = settings.spp if spp is None else spp
+        seed = settings.seed if seed is None else seed
         backend = backend or settings.backend
-        if spp < 1:
-            raise SpectralError(f"samples per pixel must be at least 1, got {spp}")
-        if backend not in single.BACKENDS:
-            raise SpectralError(f"unknown backend {backend!r}: choose one of {', '.join(single.BACKENDS)}")
+        # The overrides obey the scene's rules (a seed above 2⁶⁴ − 1 would fail on the workers, after the setup).
+        check_settings(dataclasses.replace(settings, spp=spp, seed=seed, backend=backend))
         if threads is None and self.local_workers is not None:
             threads = max(1, _local_cores() // self.local_workers)
         threads = int(threads) if threads else None
@@ -373,42 +417,50 @@ class RenderFarm:
         done, cancelled = 0, False
         work, work_done = sum(unit.pixel_samples for unit in units), 0
         last_check, alone_since = time.perf_counter(), None
-        try:
-            while done < len(units):
-                if cancel is not None and cancel():
-                    cancelled = True
-                    break
-                batch = completed.next_batch(block=False)
-                if not batch:
-                    now = time.perf_counter()
-                    if now - last_check >= WORKER_CHECK_SECONDS:
-                        last_check = now
-                        alone_since = self._check_alive(alone_since, now)
-                    time.sleep(POLL_SECONDS)
-                    continue
-                alone_since = None
-                for future in batch:
-                    if future.status == "error":
-                        raise _task_error(future, futures[future], self.address)
-                try:
-                    results = client.gather(batch)
-                except Exception as problem:
-                    raise SpectralError(f"collecting render results from {self.address} failed: "
-                                        f"{type(problem).__name__}: {problem}") from problem
-                for future, (sum_xyz, sum_sq) in zip(batch, results):
-                    unit = futures.pop(future)
-                    merger.add(unit, sum_xyz, sum_sq)
-                    work_done += unit.pixel_samples
-                    future.release()
-                done += len(batch)
-                if progress is not None:
-                    progress(film, work_done / work)
-        finally:
-            completed.clear()
-            if futures:
-                client.cancel(list(futures))
-            futures.clear()
-            scene_future.release()
+        interrupted = []  # Ctrl-C cancels like `cancel` (Dask stays consistent), then is raised
+        with _ctrl_c_sets(interrupted):
+            try:
+                while done < len(units):
+                    if interrupted or (cancel is not None and cancel()):
+                        cancelled = True
+                        break
+                    batch = completed.next_batch(block=False)
+                    if not batch:
+                        now = time.perf_counter()
+                        if now - last_check >= WORKER_CHECK_SECONDS:
+                            last_check = now
+                            alone_since = self._check_alive(alone_since, now)
+                        time.sleep(POLL_SECONDS)
+                        continue
+                    alone_since = None
+                    for future in batch:
+                        if future.status == "error":
+                            raise _task_error(future, futures[future], self.address)
+                        if future.status == "cancelled":  # not by us: the scheduler dropped it
+                            raise self._dropped_error()
+                    try:
+                        results = client.gather(batch)
+                    except CancelledError:  # dropped by the scheduler between next_batch and gather
+                        raise self._dropped_error() from None
+                    except Exception as problem:
+                        raise SpectralError(f"collecting render results from {self.address} failed: "
+                                            f"{type(problem).__name__}: {problem}") from problem
+                    for future, (sum_xyz, sum_sq) in zip(batch, results):
+                        unit = futures.pop(future)
+                        merger.add(unit, sum_xyz, sum_sq)
+                        work_done += unit.pixel_samples
+                        future.release()
+                    done += len(batch)
+                    if progress is not None:
+                        progress(film, work_done / work)
+            finally:
+                completed.clear()
+                if futures:
+                    client.cancel(list(futures))
+                futures.clear()
+                scene_future.release()
+        if interrupted:
+            raise KeyboardInterrupt
         if not cancelled and not merger.complete:
             raise SpectralError("internal error: every task completed but the film is missing passes")
 
@@ -437,6 +489,20 @@ class RenderFarm:
             raise SpectralError(f"every Dask worker of {self.address} has left and none came back within "
                                 f"{self.timeout:g} s; the render is incomplete")
         return alone_since
+
+
+    def _dropped_error(self) -> SpectralError:
+        """Why the scheduler cancelled a render task: nearly always because every worker holding the
+        scattered scene left, which loses it for good."""
+        try:
+            workers = len(self.client.nthreads())
+        except Exception:  # the scheduler is gone too
+            workers = 0
+        if not workers:
+            return SpectralError(f"every Dask worker of {self.address} has left, and the scene data they held "
+                                 f"left with them; the render is incomplete")
+        return SpectralError(f"the Dask scheduler at {self.address} dropped render tasks (the workers holding the "
+                             f"scene data left, or another client cancelled them); the render is incomplete")
 
 
 def _task_error(future, unit: Unit, address: str) -> SpectralError:

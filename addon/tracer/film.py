@@ -10,6 +10,7 @@ part of a pass (some tiles done, others not) is still a consistent image.
 import numpy as np
 
 from . import colorimetry
+from .checks import byte_size, shown
 from .errors import SpectralError
 from .grids import available_memory
 
@@ -29,8 +30,8 @@ def check_film_memory(width: int, height: int, bands: int = 1) -> None:
     needed = film_bytes(width, height, bands)
     available = available_memory()
     if available is not None and needed > available:
-        raise SpectralError(f"a {width}×{height} film needs {needed / 2**30:.1f} GiB of memory "
-                            f"({bands} band(s)), but only {available / 2**30:.1f} GiB is available")
+        raise SpectralError(f"a {shown(width, 24)}×{shown(height, 24)} film needs {byte_size(needed, 'GiB')} of "
+                            f"memory ({bands} band(s)), but only {byte_size(available, 'GiB')} is available")
 
 
 class Film:

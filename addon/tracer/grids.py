@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .checks import byte_size, shown
 from .errors import SpectralError
 from .scene import Grid
 
@@ -40,8 +41,8 @@ def affine_matrix(value, what: str) -> np.ndarray:
     """`value` as a 4×4 float64 affine matrix (row-major, acting on column vectors), or a SpectralError."""
     try:
         matrix = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got {value!r}") from None
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got {shown(value)}") from None
     if matrix.shape != (4, 4):
         raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got shape {matrix.shape}")
     if not np.all(np.isfinite(matrix)):
@@ -81,7 +82,7 @@ def load_grid(path, grid_name: str | None = None, index_to_world=None, *, nonneg
         values, matrix, name = _read_vdb(path, grid_name, index_to_world)
     else:
         raise SpectralError(f"grid file {path}: unknown grid format {path.suffix!r} (use .npy or .vdb)")
-    _check_values(values, f"grid {name!r} in {path}", nonnegative)
+    check_values(values, f"grid {name!r} in {path}", nonnegative)
     return Grid(values=values, index_to_world=matrix, name=name)
 
 
@@ -135,16 +136,50 @@ def openvdb_module():
 
 
 def _read_npy(path: Path, name: str) -> np.ndarray:
+    where = f"grid {name!r} in {path}"
+    shape, dtype = _npy_header(path, where)
+    if not (np.issubdtype(dtype, np.floating) or np.issubdtype(dtype, np.integer)):
+        raise SpectralError(f"{where} holds {dtype} values, not real numbers")
+    count = int(np.prod(shape, dtype=object))
+    # The array as stored, plus its float32 copy unless it is float32 already.
+    needed = count * (dtype.itemsize + (0 if dtype == np.float32 else 4))
+    _check_memory(needed, f"{where}: its {'×'.join(map(str, shape))} voxels")
     try:
         array = np.load(path, allow_pickle=False)
-    except (OSError, ValueError, EOFError) as problem:
-        raise SpectralError(f"grid {name!r} in {path} cannot be read as a NumPy array: {problem}") from None
-    if not isinstance(array, np.ndarray):
-        raise SpectralError(f"grid {name!r} in {path} is not a single .npy array (an .npz archive?)")
-    if not (np.issubdtype(array.dtype, np.floating) or np.issubdtype(array.dtype, np.integer)):
-        raise SpectralError(f"grid {name!r} in {path} holds {array.dtype} values, not real numbers")
+    except (OSError, ValueError, EOFError, MemoryError) as problem:
+        raise SpectralError(f"{where} cannot be read as a NumPy array: {problem}") from None
     with np.errstate(over="ignore"):  # float64 beyond float32's range becomes inf, reported as such
         return np.ascontiguousarray(array, dtype=np.float32)
+
+
+def _npy_header(path: Path, where: str) -> tuple[tuple[int, ...], np.dtype]:
+    """(shape, dtype) from a .npy file's header, without reading its data; the file must hold them all."""
+    try:
+        with open(path, "rb") as file:
+            version = np.lib.format.read_magic(file)
+            reader = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+            shape, _fortran, dtype = reader(file)
+            data_start = file.tell()
+    except (OSError, ValueError, EOFError) as problem:
+        reason = "an .npz archive, not a single .npy array" if path.read_bytes()[:2] == b"PK" else problem
+        raise SpectralError(f"{where} cannot be read as a NumPy array: {reason}") from None
+    if dtype.hasobject:
+        raise SpectralError(f"{where} cannot be read: it holds Python objects, not real numbers")
+    stored = int(np.prod(shape, dtype=object)) * dtype.itemsize
+    size = path.stat().st_size - data_start
+    if size < stored:
+        raise SpectralError(f"{where} cannot be read: it is truncated (its header promises "
+                            f"{'×'.join(map(str, shape))} values, {byte_size(stored)}; the file holds "
+                            f"{byte_size(size)})")
+    return shape, dtype
+
+
+def _check_memory(needed: int, what: str) -> None:
+    """SpectralError when `needed` bytes are more than the memory available now."""
+    available = available_memory()
+    if available is not None and needed > available:
+        raise SpectralError(f"{what} need {byte_size(needed)} of memory, "
+                            f"more than the {byte_size(available)} available")
 
 
 def _read_vdb(path: Path, grid_name: str | None, index_to_world):
@@ -198,17 +233,12 @@ def _vdb_transform(transform, where: str) -> np.ndarray:
 
 
 def _dense_buffer(shape, where: str) -> np.ndarray:
-    needed = int(np.prod(shape)) * 4
-    available = available_memory()
-    if available is not None and needed > available:
-        raise SpectralError(
-            f"{where}: a dense copy of its {'×'.join(map(str, shape))} active voxel box needs "
-            f"{needed / 2**30:.1f} GiB, more than the {available / 2**30:.1f} GiB of memory available"
-        )
+    _check_memory(int(np.prod(shape, dtype=object)) * 4,
+                  f"{where}: a dense copy of its {'×'.join(map(str, shape))} active voxel box would")
     return np.zeros(tuple(int(n) for n in shape), dtype=np.float32)
 
 
-def _check_values(values: np.ndarray, where: str, nonnegative: bool) -> None:
+def check_values(values: np.ndarray, where: str, nonnegative: bool) -> None:
     if values.ndim != 3:
         raise SpectralError(f"{where} must be a 3-D array indexed [x, y, z], found shape {values.shape}")
     if values.size == 0:

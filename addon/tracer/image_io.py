@@ -1,16 +1,26 @@
-"""Writes rendered images: multilayer EXR (XYZ, RGB and variance), PNG previews and .npy arrays.
+"""Writes rendered images: multilayer EXR (XYZ, RGB and variance), PNG previews, .npy arrays and text.
 
-Every file is written to a temporary name in the target folder and renamed into place, so a failed
-or cancelled write never leaves a half-written file or clobbers an existing one.
+All files of one command are written together (`write_all`): each to a temporary name beside its
+destination, and only when every one was written are they renamed into place. A failed or cancelled
+write never leaves a half-written file or clobbers an existing one, and never replaces some files but
+not others. `check_destination` tells before a long render whether a file can be written at all.
 """
 
 import os
 import tempfile
 from pathlib import Path
+from typing import Callable, NamedTuple
 
 import numpy as np
 
 from .errors import SpectralError
+
+
+class Output(NamedTuple):
+    """A file to write: `write(temporary_name)` writes its contents to a file of that name."""
+
+    path: Path
+    write: Callable[[str], None]
 
 
 def _open_image_io():
@@ -21,18 +31,77 @@ def _open_image_io():
     return OpenImageIO
 
 
-def _atomic_write(path: Path, write) -> Path:
+def _existing_ancestor(folder: Path) -> Path:
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    return folder
+
+
+def check_destination(path, suffix: str | None = None) -> Path:
+    """`path` if a file can be created there (its folder may not exist yet), else a SpectralError saying
+    why; `suffix`, when given, is the file name ending the format needs. Leaves nothing behind."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(handle)
+    if suffix is not None and path.suffix.lower() != suffix:
+        raise SpectralError(f"{path}: the file is written as {suffix[1:].upper()}, so its name must end in {suffix}")
+    if path.is_dir():
+        raise SpectralError(f"cannot write {path}: it is a folder")
+    folder = _existing_ancestor(path.absolute().parent)
+    if not folder.is_dir():
+        raise SpectralError(f"cannot write {path}: {folder} is a file, not a folder")
     try:
-        write(temporary)
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
+        handle, probe = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
+        os.close(handle)
+        os.unlink(probe)
+    except OSError as problem:
+        raise SpectralError(f"cannot write {path}: {problem.strerror or problem}") from None
     return path
+
+
+def _make_folders(folder: Path) -> list[Path]:
+    """Create `folder` and its missing parents; returns those created, deepest first."""
+    missing = []
+    while not folder.exists():
+        missing.append(folder)
+        folder = folder.parent
+    for created in reversed(missing):
+        created.mkdir()
+    return missing
+
+
+def write_all(outputs: list[Output]) -> list[Path]:
+    """Write every output or none (see the module docstring); folders are created as needed and removed
+    again when the writing fails. Returns the paths written."""
+    for output in outputs:
+        check_destination(output.path)
+    staged, created, done = [], [], False
+    try:
+        for output in outputs:
+            path = Path(output.path)
+            try:
+                created += _make_folders(path.parent)
+                handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+                os.close(handle)
+                staged.append(temporary)
+                output.write(temporary)
+            except OSError as problem:
+                raise SpectralError(f"cannot write {path}: {problem.strerror or problem}") from None
+            except SpectralError as problem:
+                raise SpectralError(f"cannot write {path}: {problem}") from None
+        for temporary, output in zip(staged, outputs):
+            try:
+                os.replace(temporary, output.path)
+            except OSError as problem:  # rare after a successful write in the same folder
+                raise SpectralError(f"cannot write {output.path}: {problem.strerror or problem}") from None
+        done = True
+    finally:
+        for temporary in staged:
+            if os.path.exists(temporary):
+                os.unlink(temporary)
+        if not done:
+            for folder in created:
+                if folder.is_dir() and not any(folder.iterdir()):
+                    folder.rmdir()
+    return [Path(output.path) for output in outputs]
 
 
 def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pixel_type: str) -> None:
@@ -44,14 +113,14 @@ def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pix
         spec.attribute("compression", "zip")
     output = oiio.ImageOutput.create(filename)
     if output is None or not output.open(filename, spec):
-        raise SpectralError(f"cannot write image {filename}: {oiio.geterror()}")
+        raise SpectralError(f"OpenImageIO cannot write it: {oiio.geterror() or 'it gave no reason'}")
     ok = output.write_image(np.ascontiguousarray(pixels))
     output.close()
     if not ok:
-        raise SpectralError(f"cannot write image {filename}: {oiio.geterror()}")
+        raise SpectralError(f"OpenImageIO cannot write it: {oiio.geterror() or 'it gave no reason'}")
 
 
-def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None) -> Path:
+def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None) -> Output:
     """Multilayer EXR: R, G, B (linear Rec.709), A, spectral.X/Y/Z and, if given, variance.X/Y/Z."""
     alpha = np.ones(xyz.shape[:2] + (1,))
     layers = [rgb, alpha, xyz]
@@ -60,7 +129,12 @@ def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | Non
         layers.append(variance)
         names += ["variance.X", "variance.Y", "variance.Z"]
     pixels = np.concatenate(layers, axis=2).astype(np.float32)
-    return _atomic_write(path, lambda name: _write_oiio(name, pixels, names, "float"))
+    return Output(check_destination(path, ".exr"), lambda name: _write_oiio(name, pixels, names, "float"))
+
+
+def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None) -> Path:
+    """Write `exr(...)` on its own."""
+    return write_all([exr(path, xyz, rgb, variance)])[0]
 
 
 def srgb_display(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
@@ -70,15 +144,31 @@ def srgb_display(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
     return np.round(encoded * 255).astype(np.uint8)
 
 
-def write_png(path, rgb: np.ndarray, exposure: float = 0.0) -> Path:
+def png(path, rgb: np.ndarray, exposure: float = 0.0) -> Output:
     """PNG preview of linear Rec.709 through the Standard (sRGB) view transform."""
     pixels = srgb_display(rgb, exposure)
-    return _atomic_write(path, lambda name: _write_oiio(name, pixels, ["R", "G", "B"], "uint8"))
+    return Output(check_destination(path, ".png"), lambda name: _write_oiio(name, pixels, ["R", "G", "B"], "uint8"))
+
+
+def write_png(path, rgb: np.ndarray, exposure: float = 0.0) -> Path:
+    """Write `png(...)` on its own."""
+    return write_all([png(path, rgb, exposure)])[0]
+
+
+def npy(path, xyz: np.ndarray) -> Output:
+    """XYZ as a float32 array of shape (height, width, 3)."""
+    pixels = xyz.astype(np.float32)
+    return Output(check_destination(path, ".npy"), lambda name: np.save(name, pixels))
 
 
 def write_npy(path, xyz: np.ndarray) -> Path:
-    """XYZ as a float32 array of shape (height, width, 3)."""
-    return _atomic_write(path, lambda name: np.save(name, xyz.astype(np.float32)))
+    """Write `npy(...)` on its own."""
+    return write_all([npy(path, xyz)])[0]
+
+
+def text(path, content: str) -> Output:
+    """A UTF-8 text file."""
+    return Output(check_destination(path), lambda name: Path(name).write_text(content, encoding="utf-8"))
 
 
 def read_exr(path) -> dict[str, np.ndarray]:

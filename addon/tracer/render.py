@@ -18,9 +18,7 @@ from . import sampling
 from .compile import KernelScene, compile_scene, default_band, with_band
 from .errors import SpectralError
 from .film import Film
-from .scene import Scene
-
-BACKENDS = ("numba", "numpy")
+from .scene import BACKENDS, Scene
 
 
 def backend_module(name: str):

@@ -4,13 +4,36 @@ This is what the scene file (`scene_io`, docs/scene-format.md) loads into and wh
 exporter builds; the kernels never see it directly (`compile` lowers it to flat arrays).
 Conventions (DESIGN.md): lengths in Blender units, wavelengths in nm, matrices are 4×4 row-major
 NumPy arrays acting on column vectors (world = M @ [x, y, z, 1]).
+
+A scene checks itself, whoever built it: `Scene.validate()` (called by `scene_io.load_scene` and
+`save_scene` and by `compile.compile_scene`) raises a SpectralError naming the field by its scene-file
+path and in the file's units (`media[0].albedo: ...`, `camera.fov` in degrees). The enumerations of the
+format are defined here, once.
 """
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import checks
+from .colorimetry import CMF_NAMES as CMFS
+from .errors import SpectralError
+from .phase import HG_G_LIMIT
 from .spectra import Spectrum
+from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
+
+CAMERA_KINDS = ("perspective", "orthographic")
+SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
+PHASES = ("hg", "rayleigh")
+LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot")
+WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "colour")
+WAVELENGTHS_PER_PATH = (1, 4)  # the hero alone, or the hero and 3 rotated wavelengths (spectral MIS)
+BACKENDS = ("numba", "numpy")
+SEED_MAX = 2**64 - 1  # seeds are unsigned 64-bit integers in the kernels' random streams
+# Delta and ratio tracking take about one step per unit of optical depth (through the majorant) along a
+# ray, so a medium far thicker than this renders for hours and cannot be interrupted mid-ray. It is also
+# far beyond anything visible: light through optical depth 30 is dimmed by e⁻³⁰ ≈ 1e-13.
+MAX_OPTICAL_DEPTH = 1e5
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,3 +162,168 @@ class Scene:
     media: tuple[Medium, ...] = ()
     lights: tuple[Light, ...] = ()
     settings: RenderSettings = field(default_factory=RenderSettings)
+
+    def validate(self) -> "Scene":
+        """This scene, or a SpectralError naming the first invalid field (see the module docstring)."""
+        _check_camera(self.camera, "camera")
+        for index, medium in enumerate(self.media):
+            _check_medium(medium, f"media[{index}]")
+        for index, light in enumerate(self.lights):
+            _check_light(light, f"lights[{index}]")
+        if not self.lights and not any(medium.emission is not None for medium in self.media):
+            raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point or spot "
+                                "light (or an emitting medium)")
+        if self.lights and not any(light.strength > 0 for light in self.lights):
+            raise SpectralError("lights: every light has strength 0, so nothing is lit")
+        check_settings(self.settings, "render")
+        return self
+
+
+def _check_camera(camera: Camera, where: str) -> None:
+    from .grids import affine_matrix  # grids builds Grid objects from this module
+
+    checks.whole_within(camera.width, f"{where}.width", 1)
+    checks.whole_within(camera.height, f"{where}.height", 1)
+    checks.one_of(camera.kind, f"{where}.kind", CAMERA_KINDS)
+    checks.within(np.degrees(checks.number(camera.fov, f"{where}.fov")), f"{where}.fov", 0.0, 180.0, closed=False)
+    checks.positive(checks.number(camera.ortho_scale, f"{where}.ortho_scale"), f"{where}.ortho_scale")
+    checks.one_of(camera.sensor_fit, f"{where}.sensor_fit", SENSOR_FITS)
+    checks.number(camera.shift_x, f"{where}.shift_x")
+    checks.number(camera.shift_y, f"{where}.shift_y")
+    affine_matrix(camera.to_world, f"{where}.to_world")
+
+
+def _check_grid(grid: Grid, where: str, nonnegative: bool = True) -> None:
+    from .grids import affine_matrix, check_values
+
+    check_values(np.asarray(grid.values), f"{where}: grid {grid.name!r}", nonnegative)
+    affine_matrix(grid.index_to_world, f"{where}.index_to_world")
+
+
+def _check_medium(medium: Medium, where: str) -> None:
+    if not isinstance(medium.name, str):
+        raise SpectralError(f"{where}.name: expected a string, found {checks.shown(medium.name)}")
+    _check_grid(medium.density, f"{where}.density")
+    checks.positive(checks.number(medium.density_scale, f"{where}.density_scale"), f"{where}.density_scale")
+    checks.spectrum_within(medium.extinction.values, f"{where}.extinction", "extinction must not be negative",
+                           0.0, np.inf)
+    _check_albedo(medium.albedo_densities, medium.albedo_table, f"{where}.albedo")
+    checks.spectrum_within(medium.anisotropy.values, f"{where}.anisotropy",
+                           f"|g| must be at most {HG_G_LIMIT!r} (sharper lobes are not resolved by float64 directions)",
+                           -HG_G_LIMIT, HG_G_LIMIT)
+    checks.one_of(medium.phase, f"{where}.phase", PHASES)
+    _check_optical_depth(medium, where)
+    if medium.fluorescence is not None:
+        _check_fluorescence(medium.fluorescence, f"{where}.fluorescence")
+    if medium.emission is not None:
+        _check_emission(medium.emission, f"{where}.emission")
+
+
+def optical_depth(medium: Medium) -> float:
+    """An upper bound of the optical depth along any straight path through the medium: its largest
+    extinction coefficient (with fluorescent absorption) times the diagonal of its grid's world box."""
+    extinction = medium.extinction.values
+    if medium.fluorescence is not None:
+        extinction = extinction + medium.fluorescence.excitation.values
+    shape = np.array(medium.density.values.shape, dtype=np.float64)
+    diagonal = float(np.linalg.norm(np.asarray(medium.density.index_to_world, dtype=np.float64)[:3, :3] @ shape))
+    return float(medium.density_scale * extinction.max() * medium.density.values.max()) * diagonal
+
+
+def _check_optical_depth(medium: Medium, where: str) -> None:
+    depth = optical_depth(medium)
+    if not depth <= MAX_OPTICAL_DEPTH:
+        raise SpectralError(
+            f"{where}: the optical depth through the medium reaches {depth:.3g} (density_scale × extinction × "
+            f"density × size), more than the {MAX_OPTICAL_DEPTH:g} the tracer accepts: tracking would take about "
+            f"that many steps per ray, and nothing shows through beyond ~30; lower density_scale or extinction")
+
+
+def _check_albedo(densities, table, where: str) -> None:
+    """The table's rows are written as `where` when it is one level at density 0 (the scene file's single
+    spectrum), else as `where.spectra[i]` with their levels `where.densities[i]`."""
+    densities, table = np.asarray(densities, dtype=np.float64), np.asarray(table, dtype=np.float64)
+    if densities.ndim != 1 or densities.size == 0 or table.shape != (densities.size, GRID.size):
+        raise SpectralError(f"{where}: expected L density levels and an L × {GRID.size} table, found shapes "
+                            f"{densities.shape} and {table.shape}")
+    single = densities.size == 1 and densities[0] == 0
+    for index, density in enumerate(densities):
+        checks.within(checks.number(density, f"{where}.densities[{index}]"), f"{where}.densities[{index}]", 0.0)
+    if np.any(np.diff(densities) <= 0):
+        raise SpectralError(f"{where}.densities: density levels must increase strictly, found {densities.tolist()}")
+    for index, row in enumerate(table):
+        row_where = where if single else f"{where}.spectra[{index}]"
+        if not np.all(np.isfinite(row)):
+            raise SpectralError(f"{row_where}: the albedo contains NaN or infinite values")
+        checks.spectrum_within(row, row_where, "albedo must be within [0, 1]", 0.0, 1.0)
+
+
+def _check_fluorescence(fluorescence: Fluorescence, where: str) -> None:
+    for part in ("excitation", "emission"):
+        values = getattr(fluorescence, part).values
+        checks.spectrum_within(values, f"{where}.{part}", f"{part} must not be negative", 0.0, np.inf)
+        if not values.any():
+            raise SpectralError(f"{where}.{part}: the {part} spectrum is zero everywhere"
+                                + (", so it cannot be a pdf" if part == "emission" else ""))
+    checks.within(checks.number(fluorescence.quantum_yield, f"{where}.quantum_yield"), f"{where}.quantum_yield",
+                  0.0, 1.0)
+
+
+def _check_emission(emission: BlackbodyEmission, where: str) -> None:
+    _check_grid(emission.temperature, f"{where}.temperature", nonnegative=False)
+    scale = checks.number(emission.temperature_scale, f"{where}.temperature_scale")
+    offset = checks.number(emission.temperature_offset, f"{where}.temperature_offset")
+    checks.within(checks.number(emission.intensity, f"{where}.intensity"), f"{where}.intensity", 0.0)
+    values = emission.temperature.values
+    coldest = min(float(values.min()) * scale, float(values.max()) * scale) + offset
+    if coldest < 0:
+        raise SpectralError(f"{where}: temperatures (grid value × temperature_scale + temperature_offset) must be "
+                            f"non-negative kelvin, found {coldest:g} K")
+
+
+def _check_light(light: Light, where: str) -> None:
+    kind = checks.one_of(light.kind, f"{where}.kind", LIGHT_KINDS)
+    _check_light_spectrum(light.spectrum, f"{where}.spectrum")
+    checks.within(checks.number(light.strength, f"{where}.strength"), f"{where}.strength", 0.0)
+    if not isinstance(light.name, str):
+        raise SpectralError(f"{where}.name: expected a string, found {checks.shown(light.name)}")
+    if kind == "sun":
+        checks.direction(light.direction, f"{where}.direction")
+        checks.within(np.degrees(checks.number(light.angle, f"{where}.angle")), f"{where}.angle", 0.0, 180.0)
+    if kind == "sky" and light.horizon_spectrum is not None:
+        _check_light_spectrum(light.horizon_spectrum, f"{where}.horizon_spectrum")
+    if kind in ("point", "spot"):
+        checks.vector(light.position, f"{where}.position")
+    if kind == "spot":
+        checks.direction(light.spot_direction, f"{where}.spot_direction")
+        checks.within(np.degrees(checks.number(light.spot_size, f"{where}.spot_size")), f"{where}.spot_size",
+                      0.0, 180.0, closed=False)
+        checks.within(checks.number(light.spot_blend, f"{where}.spot_blend"), f"{where}.spot_blend", 0.0, 1.0)
+
+
+def _check_light_spectrum(spectrum: Spectrum, where: str) -> None:
+    checks.spectrum_within(spectrum.values, where, "a light spectrum must not be negative", 0.0, np.inf)
+    if not spectrum.values.any():
+        raise SpectralError(f"{where}: the light's spectrum is zero everywhere")
+
+
+def check_settings(settings: RenderSettings, where: str = "render") -> None:
+    """The render settings' part of `Scene.validate` (also for settings overridden after loading)."""
+    checks.whole_within(settings.spp, f"{where}.spp", 1)
+    checks.whole_within(settings.seed, f"{where}.seed", 0, SEED_MAX)
+    checks.whole_within(settings.max_depth, f"{where}.max_depth", 1)
+    checks.whole_within(settings.rr_depth, f"{where}.rr_depth", 0)
+    checks.one_of(settings.wavelength_sampling, f"{where}.wavelength_sampling", WAVELENGTH_SAMPLINGS)
+    per_path = checks.whole(settings.wavelengths_per_path, f"{where}.wavelengths_per_path")
+    if per_path not in WAVELENGTHS_PER_PATH:
+        raise SpectralError(f"{where}.wavelengths_per_path: must be "
+                            f"{' or '.join(map(str, WAVELENGTHS_PER_PATH))}, found {per_path}")
+    lambda_min, lambda_max = (
+        checks.within(checks.number(getattr(settings, key), f"{where}.{key}"), f"{where}.{key}", LAMBDA_MIN, LAMBDA_MAX)
+        for key in ("lambda_min", "lambda_max"))
+    if lambda_min >= lambda_max:
+        raise SpectralError(f"{where}: the wavelength range {lambda_min:g}–{lambda_max:g} nm is empty "
+                            "(lambda_min must be below lambda_max)")
+    checks.whole_within(settings.bands, f"{where}.bands", 1)
+    checks.one_of(settings.cmf, f"{where}.cmf", CMFS)
+    checks.one_of(settings.backend, f"{where}.backend", BACKENDS)

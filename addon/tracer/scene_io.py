@@ -11,27 +11,18 @@ from pathlib import Path
 
 import numpy as np
 
-from . import spectra
+from . import checks, spectra
+from .checks import shown
 from .errors import SpectralError
 from .film import check_film_memory, film_bytes
 from .grids import affine_matrix, load_grid, save_grid_npy
-from .scene import BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
+from .scene import LIGHT_KINDS, BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
 from .spectra import Spectrum
-from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
+from .wavelengths import GRID
 
 FORMAT = "spectral-volume-scene"
 VERSION = 1
 SCENE_FILE = "scene.json"
-
-CAMERA_KINDS = ("perspective", "orthographic")
-SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
-PHASES = ("hg", "rayleigh")
-LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot")
-WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "colour")
-WAVELENGTHS_PER_PATH = (1, 4)
-CMFS = ("cie1931", "wyman1", "wyman3")
-BACKENDS = ("numba", "numpy")
-# The film keeps XYZ sums and squared sums per pixel: 2 × 4 float64.
 
 _TOP = {"required": ("format", "version", "camera"), "optional": ("media", "lights", "render")}
 _CAMERA = {
@@ -62,20 +53,22 @@ _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettin
 
 
 def load_scene(path) -> Scene:
-    """Read and check a scene file (or a folder holding `scene.json`); grids resolve against its folder."""
+    """Read and check a scene file (or a folder holding `scene.json`); grids resolve against its folder.
+
+    The reader checks the file's structure and types; `Scene.validate` then checks the values."""
     path = _scene_path(path)
     data = _fields(_read_json(path), "scene", _TOP)
     if data["format"] != FORMAT:
-        raise SpectralError(f"format: expected {FORMAT!r}, found {data['format']!r} (is {path} a scene file?)")
-    if _int(data["version"], "version", minimum=1) != VERSION:
-        raise SpectralError(f"version: this tracer reads version {VERSION} of the format, found {data['version']}")
+        raise SpectralError(f"format: expected {FORMAT!r}, found {shown(data['format'])} (is {path} a scene file?)")
+    if data["version"] != VERSION:
+        raise SpectralError(f"version: this tracer reads version {VERSION} of the format, "
+                            f"found {shown(data['version'])}")
     folder = path.parent
     camera = _camera(data["camera"], "camera")
     media = tuple(_medium(spec, f"media[{i}]", folder) for i, spec in enumerate(_list(data.get("media", []), "media")))
     lights = tuple(_light(spec, f"lights[{i}]", folder) for i, spec in enumerate(_list(data.get("lights", []), "lights")))
-    if not lights and not any(medium.emission is not None for medium in media):
-        raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point or spot light")
-    return Scene(camera=camera, media=media, lights=lights, settings=_render(data.get("render", {}), "render"))
+    scene = Scene(camera=camera, media=media, lights=lights, settings=_render(data.get("render", {}), "render"))
+    return scene.validate()
 
 
 def _scene_path(path) -> Path:
@@ -98,6 +91,10 @@ def _read_json(path: Path):
         ) from None
     except SpectralError as problem:
         raise SpectralError(f"scene file {path}: {problem}") from None
+    except RecursionError:
+        raise SpectralError(f"scene file {path} nests its lists and objects too deeply to be a scene") from None
+    except ValueError as problem:  # e.g. an integer of more than 4300 digits
+        raise SpectralError(f"scene file {path} cannot be read as JSON: {problem}") from None
 
 
 def _unique_keys(pairs):
@@ -114,21 +111,19 @@ def _no_constant(name):
 
 def _camera(value, where: str) -> Camera:
     data = _fields(value, where, _CAMERA)
-    width = _int(data["width"], f"{where}.width", minimum=1)
-    height = _int(data["height"], f"{where}.height", minimum=1)
+    width = checks.whole_within(data["width"], f"{where}.width", 1)
+    height = checks.whole_within(data["height"], f"{where}.height", 1)
     _check_film_memory(width, height, where)
-    kind = _choice(data.get("kind", "perspective"), f"{where}.kind", CAMERA_KINDS)
-    fov = _float(data.get("fov", np.degrees(Camera.fov)), f"{where}.fov", 0.0, 180.0, closed=False)
     return Camera(
         to_world=affine_matrix(data["to_world"], f"{where}.to_world"),
         width=width,
         height=height,
-        kind=kind,
-        fov=float(np.radians(fov)),
-        ortho_scale=_positive(data.get("ortho_scale", Camera.ortho_scale), f"{where}.ortho_scale"),
-        sensor_fit=_choice(data.get("sensor_fit", "AUTO"), f"{where}.sensor_fit", SENSOR_FITS),
-        shift_x=_float(data.get("shift_x", 0.0), f"{where}.shift_x"),
-        shift_y=_float(data.get("shift_y", 0.0), f"{where}.shift_y"),
+        kind=data.get("kind", Camera.kind),
+        fov=float(np.radians(checks.number(data.get("fov", np.degrees(Camera.fov)), f"{where}.fov"))),
+        ortho_scale=checks.number(data.get("ortho_scale", Camera.ortho_scale), f"{where}.ortho_scale"),
+        sensor_fit=data.get("sensor_fit", Camera.sensor_fit),
+        shift_x=checks.number(data.get("shift_x", 0.0), f"{where}.shift_x"),
+        shift_y=checks.number(data.get("shift_y", 0.0), f"{where}.shift_y"),
     )
 
 
@@ -141,25 +136,18 @@ def _check_film_memory(width: int, height: int, where: str) -> None:
 
 def _medium(value, where: str, folder: Path) -> Medium:
     data = _fields(value, where, _MEDIUM)
-    name = data.get("name", where)
-    if not isinstance(name, str):
-        raise SpectralError(f"{where}.name: expected a string, found {name!r}")
-    extinction = _spectrum(data["extinction"], f"{where}.extinction", folder)
-    _check_range(extinction, f"{where}.extinction", "extinction must not be negative", 0.0, np.inf)
-    densities, table = _albedo(data["albedo"], f"{where}.albedo", folder)
-    anisotropy = _spectrum(data.get("anisotropy", 0.0), f"{where}.anisotropy", folder)
-    _check_range(anisotropy, f"{where}.anisotropy", "|g| must be below 1", -1.0, 1.0, closed=False)
     fluorescence = data.get("fluorescence")
     emission = data.get("emission")
+    densities, table = _albedo(data["albedo"], f"{where}.albedo", folder)
     return Medium(
-        name=name,
+        name=data.get("name", where),
         density=_grid(data["density"], f"{where}.density", folder),
-        density_scale=_positive(data.get("density_scale", 1.0), f"{where}.density_scale"),
-        extinction=extinction,
+        density_scale=checks.number(data.get("density_scale", 1.0), f"{where}.density_scale"),
+        extinction=_spectrum(data["extinction"], f"{where}.extinction", folder),
         albedo_densities=densities,
         albedo_table=table,
-        anisotropy=anisotropy,
-        phase=_choice(data.get("phase", "hg"), f"{where}.phase", PHASES),
+        anisotropy=_spectrum(data.get("anisotropy", 0.0), f"{where}.anisotropy", folder),
+        phase=data.get("phase", Medium.phase),
         fluorescence=None if fluorescence is None else _fluorescence(fluorescence, f"{where}.fluorescence", folder),
         emission=None if emission is None else _emission(emission, f"{where}.emission", folder),
     )
@@ -169,10 +157,10 @@ def _grid(value, where: str, folder: Path, nonnegative: bool = True) -> Grid:
     data = _fields(value, where, _GRID)
     file = data["file"]
     if not isinstance(file, str) or not file:
-        raise SpectralError(f"{where}.file: expected a path relative to the scene file, found {file!r}")
+        raise SpectralError(f"{where}.file: expected a path relative to the scene file, found {shown(file)}")
     grid_name = data.get("grid")
     if grid_name is not None and not isinstance(grid_name, str):
-        raise SpectralError(f"{where}.grid: expected a grid name, found {grid_name!r}")
+        raise SpectralError(f"{where}.grid: expected a grid name, found {shown(grid_name)}")
     matrix = data.get("index_to_world")
     if matrix is not None:
         matrix = affine_matrix(matrix, f"{where}.index_to_world")
@@ -193,120 +181,64 @@ def _albedo(value, where: str, folder: Path) -> tuple[np.ndarray, np.ndarray]:
                 f"{where}: densities and spectra must be two non-empty lists of equal length, "
                 f"found {len(levels)} and {len(spectra_)}"
             )
-        densities = np.array([_float(d, f"{where}.densities[{i}]", 0.0) for i, d in enumerate(levels)])
-        if np.any(np.diff(densities) <= 0):
-            raise SpectralError(f"{where}.densities: density levels must increase strictly, found {levels}")
-        rows = [_albedo_spectrum(s, f"{where}.spectra[{i}]", folder) for i, s in enumerate(spectra_)]
+        densities = np.array([checks.number(d, f"{where}.densities[{i}]") for i, d in enumerate(levels)])
+        rows = [_spectrum(s, f"{where}.spectra[{i}]", folder) for i, s in enumerate(spectra_)]
         return densities, np.stack([row.values for row in rows])
-    return np.zeros(1), _albedo_spectrum(value, where, folder).values[np.newaxis, :].copy()
-
-
-def _albedo_spectrum(value, where: str, folder: Path) -> Spectrum:
-    albedo = _spectrum(value, where, folder)
-    _check_range(albedo, where, "albedo must be within [0, 1]", 0.0, 1.0)
-    return albedo
+    return np.zeros(1), _spectrum(value, where, folder).values[np.newaxis, :].copy()
 
 
 def _fluorescence(value, where: str, folder: Path) -> Fluorescence:
     data = _fields(value, where, _FLUORESCENCE)
-    excitation = _spectrum(data["excitation"], f"{where}.excitation", folder)
-    _check_range(excitation, f"{where}.excitation", "excitation must not be negative", 0.0, np.inf)
-    emission = _spectrum(data["emission"], f"{where}.emission", folder)
-    _check_range(emission, f"{where}.emission", "emission must not be negative", 0.0, np.inf)
-    if emission.integral() <= 0:
-        raise SpectralError(f"{where}.emission: the emission spectrum is zero everywhere, so it cannot be a pdf")
     return Fluorescence(
-        excitation=excitation,
-        emission=emission,
-        quantum_yield=_float(data["quantum_yield"], f"{where}.quantum_yield", 0.0, 1.0),
+        excitation=_spectrum(data["excitation"], f"{where}.excitation", folder),
+        emission=_spectrum(data["emission"], f"{where}.emission", folder),
+        quantum_yield=checks.number(data["quantum_yield"], f"{where}.quantum_yield"),
     )
 
 
 def _emission(value, where: str, folder: Path) -> BlackbodyEmission:
     data = _fields(value, where, _EMISSION)
-    temperature = _grid(data["temperature"], f"{where}.temperature", folder, nonnegative=False)
-    scale = _float(data.get("temperature_scale", 1.0), f"{where}.temperature_scale")
-    offset = _float(data.get("temperature_offset", 0.0), f"{where}.temperature_offset")
-    coldest = min(float(temperature.values.min()) * scale, float(temperature.values.max()) * scale) + offset
-    if coldest < 0:
-        raise SpectralError(
-            f"{where}: temperatures (grid value × temperature_scale + temperature_offset) must be "
-            f"non-negative kelvin, found {coldest:g} K"
-        )
     return BlackbodyEmission(
-        temperature=temperature,
-        intensity=_float(data.get("intensity", 1.0), f"{where}.intensity", 0.0),
-        temperature_scale=scale,
-        temperature_offset=offset,
+        temperature=_grid(data["temperature"], f"{where}.temperature", folder, nonnegative=False),
+        intensity=checks.number(data.get("intensity", 1.0), f"{where}.intensity"),
+        temperature_scale=checks.number(data.get("temperature_scale", 1.0), f"{where}.temperature_scale"),
+        temperature_offset=checks.number(data.get("temperature_offset", 0.0), f"{where}.temperature_offset"),
     )
 
 
 def _light(value, where: str, folder: Path) -> Light:
     if not isinstance(value, dict) or "kind" not in value:
         kinds = ", ".join(LIGHT_KINDS)
-        raise SpectralError(f"{where}: a light is an object with a \"kind\" ({kinds}), found {value!r}")
-    kind = _choice(value["kind"], f"{where}.kind", LIGHT_KINDS)
+        raise SpectralError(f"{where}: a light is an object with a \"kind\" ({kinds}), found {shown(value)}")
+    kind = checks.one_of(value["kind"], f"{where}.kind", LIGHT_KINDS)
     extra = _LIGHT_FIELDS[kind]
     schema = {"required": _LIGHT_COMMON + extra["required"], "optional": _LIGHT_OPTIONAL + extra["optional"]}
     data = _fields(value, where, schema, what=f" for {kind} lights")
-    spectrum = _light_spectrum(data["spectrum"], f"{where}.spectrum", folder)
     fields = {}
     if kind == "sun":
-        fields["direction"] = _direction(data["direction"], f"{where}.direction")
-        fields["angle"] = float(np.radians(_float(data.get("angle", 0.0), f"{where}.angle", 0.0, 180.0)))
+        fields["direction"] = _unit(data["direction"], f"{where}.direction")
+        fields["angle"] = float(np.radians(checks.number(data.get("angle", 0.0), f"{where}.angle")))
     if kind == "sky" and "horizon_spectrum" in data:
-        fields["horizon_spectrum"] = _light_spectrum(
-            data["horizon_spectrum"], f"{where}.horizon_spectrum", folder)
+        fields["horizon_spectrum"] = _spectrum(data["horizon_spectrum"], f"{where}.horizon_spectrum", folder)
     if kind in ("point", "spot"):
-        fields["position"] = _vector(data["position"], f"{where}.position")
+        fields["position"] = checks.vector(data["position"], f"{where}.position")
     if kind == "spot":
-        fields["spot_direction"] = _direction(data["spot_direction"], f"{where}.spot_direction")
+        fields["spot_direction"] = _unit(data["spot_direction"], f"{where}.spot_direction")
         size = data.get("spot_size", np.degrees(Light.spot_size))
-        fields["spot_size"] = float(np.radians(_float(size, f"{where}.spot_size", 0.0, 180.0, closed=False)))
-        fields["spot_blend"] = _float(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend", 0.0, 1.0)
-    name = data.get("name", "")
-    if not isinstance(name, str):
-        raise SpectralError(f"{where}.name: expected a string, found {name!r}")
-    strength = _float(data.get("strength", 1.0), f"{where}.strength", 0.0)
-    return Light(kind=kind, spectrum=spectrum, strength=strength, name=name, **fields)
-
-
-def _light_spectrum(value, where: str, folder: Path) -> Spectrum:
-    spectrum = _spectrum(value, where, folder)
-    _check_range(spectrum, where, "a light spectrum must not be negative", 0.0, np.inf)
-    return spectrum
+        fields["spot_size"] = float(np.radians(checks.number(size, f"{where}.spot_size")))
+        fields["spot_blend"] = checks.number(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend")
+    return Light(kind=kind, spectrum=_spectrum(data["spectrum"], f"{where}.spectrum", folder),
+                 strength=checks.number(data.get("strength", 1.0), f"{where}.strength"), name=data.get("name", ""),
+                 **fields)
 
 
 def _render(value, where: str) -> RenderSettings:
     data = _fields(value, where, _RENDER)
     defaults = RenderSettings()
-
-    def get(key):
-        return data.get(key, getattr(defaults, key))
-
-    lambda_min = _float(get("lambda_min"), f"{where}.lambda_min", LAMBDA_MIN, LAMBDA_MAX)
-    lambda_max = _float(get("lambda_max"), f"{where}.lambda_max", LAMBDA_MIN, LAMBDA_MAX)
-    if lambda_min >= lambda_max:
-        raise SpectralError(
-            f"{where}: the wavelength range {lambda_min:g}–{lambda_max:g} nm is empty "
-            "(lambda_min must be below lambda_max)"
-        )
-    per_path = _int(get("wavelengths_per_path"), f"{where}.wavelengths_per_path", minimum=1)
-    if per_path not in WAVELENGTHS_PER_PATH:
-        raise SpectralError(f"{where}.wavelengths_per_path: must be 1 or 4, found {per_path}")
-    return RenderSettings(
-        spp=_int(get("spp"), f"{where}.spp", minimum=1),
-        seed=_int(get("seed"), f"{where}.seed", minimum=0),
-        max_depth=_int(get("max_depth"), f"{where}.max_depth", minimum=1),
-        rr_depth=_int(get("rr_depth"), f"{where}.rr_depth", minimum=0),
-        wavelength_sampling=_choice(get("wavelength_sampling"), f"{where}.wavelength_sampling", WAVELENGTH_SAMPLINGS),
-        wavelengths_per_path=per_path,
-        lambda_min=lambda_min,
-        lambda_max=lambda_max,
-        bands=_int(get("bands"), f"{where}.bands", minimum=1),
-        cmf=_choice(get("cmf"), f"{where}.cmf", CMFS),
-        backend=_choice(get("backend"), f"{where}.backend", BACKENDS),
-    )
+    values = {key: data.get(key, getattr(defaults, key)) for key in _RENDER["optional"]}
+    for key in ("lambda_min", "lambda_max"):
+        values[key] = checks.number(values[key], f"{where}.{key}")
+    return RenderSettings(**values)
 
 
 # ---------------------------------------------------------------------------------------------- values
@@ -315,7 +247,7 @@ def _render(value, where: str) -> RenderSettings:
 def _fields(value, where: str, schema: dict, what: str = "") -> dict:
     """`value` as a dict with every required key and no unknown one; `what` qualifies the messages."""
     if not isinstance(value, dict):
-        raise SpectralError(f"{where}: expected an object, found {value!r}")
+        raise SpectralError(f"{where}: expected an object, found {shown(value)}")
     allowed = schema["required"] + schema["optional"]
     for key in value:
         if key not in allowed:
@@ -328,58 +260,13 @@ def _fields(value, where: str, schema: dict, what: str = "") -> dict:
 
 def _list(value, where: str) -> list:
     if not isinstance(value, list):
-        raise SpectralError(f"{where}: expected a list, found {value!r}")
+        raise SpectralError(f"{where}: expected a list, found {shown(value)}")
     return value
 
 
-def _float(value, where: str, low: float = -np.inf, high: float = np.inf, closed: bool = True) -> float:
-    """A finite number in [low, high] (or (low, high) when not `closed`)."""
-    try:
-        number = float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else np.nan
-    except OverflowError:
-        number = np.nan
-    if not np.isfinite(number):
-        raise SpectralError(f"{where}: expected a finite number, found {value!r}")
-    inside = low <= number <= high if closed else low < number < high
-    if not inside:
-        brackets = "[]" if closed else "()"
-        raise SpectralError(f"{where}: must be within {brackets[0]}{low:g}, {high:g}{brackets[1]}, found {number:g}")
-    return number
-
-
-def _positive(value, where: str) -> float:
-    number = _float(value, where)
-    if number <= 0:
-        raise SpectralError(f"{where}: must be positive, found {number:g}")
-    return number
-
-
-def _int(value, where: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise SpectralError(f"{where}: expected a whole number, found {value!r}")
-    if value < minimum:
-        raise SpectralError(f"{where}: must be at least {minimum}, found {value}")
-    return value
-
-
-def _choice(value, where: str, allowed: tuple) -> str:
-    if value not in allowed:
-        raise SpectralError(f"{where}: unknown value {value!r} (allowed: {', '.join(allowed)})")
-    return value
-
-
-def _vector(value, where: str) -> np.ndarray:
-    if not isinstance(value, list) or len(value) != 3:
-        raise SpectralError(f"{where}: expected a list of 3 numbers, found {value!r}")
-    return np.array([_float(c, f"{where}[{i}]") for i, c in enumerate(value)])
-
-
-def _direction(value, where: str) -> np.ndarray:
-    vector = _vector(value, where)
-    length = np.linalg.norm(vector)
-    if length == 0:
-        raise SpectralError(f"{where}: a direction cannot have zero length")
-    return vector / length
+def _unit(value, where: str) -> np.ndarray:
+    vector = checks.direction(value, where)
+    return vector / np.linalg.norm(vector)
 
 
 def _spectrum(value, where: str, folder: Path) -> Spectrum:
@@ -391,24 +278,16 @@ def _spectrum(value, where: str, folder: Path) -> Spectrum:
         message = str(problem)
         raise SpectralError(message if where in message else f"{where}: {message}") from None
     except (TypeError, ValueError) as problem:
-        raise SpectralError(f"{where}: invalid spectrum description {value!r} ({problem})") from None
-
-
-def _check_range(spectrum: Spectrum, where: str, rule: str, low: float, high: float, closed: bool = True) -> None:
-    """Error naming the worst value outside [low, high] (or the open interval) and its wavelength."""
-    values = spectrum.values
-    outside = (values < low) | (values > high) if closed else (values <= low) | (values >= high)
-    if outside.any():
-        excess = np.where(outside, np.maximum(low - values, values - high), -np.inf)
-        worst = int(np.argmax(excess))
-        raise SpectralError(f"{where}: {rule}, found {values[worst]:g} at {GRID[worst]:g} nm")
+        raise SpectralError(f"{where}: invalid spectrum description {shown(value)} ({problem})") from None
 
 
 # ---------------------------------------------------------------------------------------------- saving
 
 
 def save_scene(scene: Scene, folder) -> Path:
-    """Write `scene` as `folder/scene.json` plus one `.npy` per grid; returns the JSON file's path."""
+    """Write `scene` (valid: `Scene.validate`) as `folder/scene.json` plus one `.npy` per grid; returns
+    the JSON file's path."""
+    scene.validate()
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     data = {

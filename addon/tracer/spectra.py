@@ -28,7 +28,20 @@ ILLUMINANT_NAMES = (
     *(f"FL{i}" for i in range(1, 13)),
     "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2",
 )
-SPEC_TYPES = ("constant", "table", "gaussian", "blackbody", "illuminant", "csv", "window", "scale", "sum")
+# The description types of `from_spec` and the fields each takes besides "type"; any other field is an error.
+SPEC_FIELDS = {
+    "constant": ("value",),
+    "table": ("wavelengths", "values"),
+    "gaussian": ("peak", "width", "height"),
+    "blackbody": ("temperature",),
+    "illuminant": ("name",),
+    "csv": ("path", "units"),
+    "window": ("of", "min", "max"),
+    "scale": ("of", "factor"),
+    "sum": ("of",),
+}
+SPEC_TYPES = tuple(SPEC_FIELDS)
+MAX_SPEC_DEPTH = 32  # descriptions nest ("scale" of a "sum" of ...) at most this deep
 RGB_METHODS = {"jakob2019": "Jakob 2019", "otsu2018": "Otsu 2018"}
 # Wavelength units a CSV file may be in, as nanometres per unit.
 CSV_UNITS = {"nm": 1.0, "um": 1e3, "µm": 1e3, "μm": 1e3, "A": 0.1, "Å": 0.1}
@@ -79,7 +92,7 @@ def constant(value: float) -> Spectrum:
 def _float_array(numbers, what: str, name: str) -> np.ndarray:
     try:
         return np.asarray(numbers, dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise SpectralError(f"spectrum {name!r}: {what} must be a list of numbers") from None
 
 
@@ -274,12 +287,21 @@ def _field(spec: dict, key: str, name: str, default=None):
     return spec[key]
 
 
+def _finite(value, what: str) -> float:
+    """A JSON number as a float; integers beyond float64's range are an error, not an OverflowError."""
+    try:
+        return float(value)
+    except OverflowError:
+        digits = int(abs(value).bit_length() * 0.30103) + 1  # str() refuses integers over 4300 digits
+        raise SpectralError(f"{what} (about {digits} digits) is too large") from None
+
+
 def _number(spec: dict, key: str, name: str, default=None) -> float:
     value = _field(spec, key, name, default)
     if not _is_number(value):
         raise SpectralError(f"{name}: field {key!r} of a spectrum of type {spec['type']!r} must be a number, "
                             f"got {value!r}")
-    return float(value)
+    return _finite(value, f"{name}: field {key!r} of a spectrum of type {spec['type']!r}:")
 
 
 def _text(spec: dict, key: str, name: str, default=None) -> str:
@@ -295,19 +317,28 @@ def _csv_path(spec: dict, name: str, base_dir) -> Path:
     return path if base_dir is None or path.is_absolute() else Path(base_dir) / path
 
 
-def _sum(spec: dict, name: str, base_dir) -> Spectrum:
+def _sum(spec: dict, name: str, base_dir, depth: int) -> Spectrum:
     parts = _field(spec, "of", name)
     if not isinstance(parts, list) or not parts:
         raise SpectralError(f"{name}: field 'of' of a 'sum' spectrum must be a non-empty list of spectra")
-    spectra = [from_spec(part, f"{name}.of[{i}]", base_dir=base_dir) for i, part in enumerate(parts)]
+    spectra = [_from_spec(part, f"{name}.of[{i}]", base_dir, depth + 1) for i, part in enumerate(parts)]
     return Spectrum(np.sum([spectrum.values for spectrum in spectra], axis=0))
 
 
-def _build(spec: dict, name: str, base_dir) -> Spectrum:
-    def inner():
-        return from_spec(_field(spec, "of", name), f"{name}.of", base_dir=base_dir)
+def _build(spec: dict, name: str, base_dir, depth: int) -> Spectrum:
+    kind = spec["type"]
+    if kind not in SPEC_FIELDS:
+        raise SpectralError(f"{name}: unknown spectrum type {kind!r}; known types: {', '.join(SPEC_TYPES)}")
+    allowed = ("type", *SPEC_FIELDS[kind])
+    for key in spec:
+        if key not in allowed:
+            raise SpectralError(f"{name}: unknown field {key!r} in a spectrum of type {kind!r} "
+                                f"(allowed: {', '.join(allowed)})")
 
-    match spec["type"]:
+    def inner():
+        return _from_spec(_field(spec, "of", name), f"{name}.of", base_dir, depth + 1)
+
+    match kind:
         case "constant":
             return constant(_number(spec, "value", name))
         case "table":
@@ -326,18 +357,24 @@ def _build(spec: dict, name: str, base_dir) -> Spectrum:
         case "scale":
             return inner() * _number(spec, "factor", name)
         case "sum":
-            return _sum(spec, name, base_dir)
-    raise SpectralError(f"{name}: unknown spectrum type {spec['type']!r}; known types: {', '.join(SPEC_TYPES)}")
+            return _sum(spec, name, base_dir, depth)
 
 
 def from_spec(spec, name: str = "spectrum", *, base_dir=None) -> Spectrum:
     """Build a spectrum from its scene-format description: a number (a constant) or a dict whose "type" is
-    one of SPEC_TYPES. A relative csv "path" is taken relative to `base_dir` (the scene file's folder)."""
+    one of SPEC_TYPES, with the fields SPEC_FIELDS lists for it (others are errors), nested at most
+    MAX_SPEC_DEPTH deep. A relative csv "path" is taken relative to `base_dir` (the scene file's folder)."""
+    return _from_spec(spec, name, base_dir, 0)
+
+
+def _from_spec(spec, name: str, base_dir, depth: int) -> Spectrum:
+    if depth >= MAX_SPEC_DEPTH:
+        raise SpectralError(f"{name}: spectra are nested more than {MAX_SPEC_DEPTH} deep")
     if _is_number(spec):
-        return constant(spec)
+        return constant(_finite(spec, f"{name}: the number"))
     if not isinstance(spec, dict) or "type" not in spec:
         raise SpectralError(f"{name}: a spectrum is a number or an object with a \"type\", got {spec!r}")
-    return _build(spec, name, base_dir)
+    return _build(spec, name, base_dir, depth)
 
 
 def to_spec(spectrum: Spectrum) -> dict:

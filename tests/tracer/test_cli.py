@@ -4,9 +4,11 @@ reports bad input with exit code 1 and a message, leaving existing files untouch
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from addon.tracer import image_io
 
@@ -88,3 +90,66 @@ def test_the_progress_bar_estimates_the_time_left_from_the_samples_done_since_it
     assert len(lines) == 3 and "left" not in lines[1] and lines[2].endswith("~  8.0s left")
     bar.notice("a line of its own")
     assert stream.getvalue().endswith("a line of its own\n")
+
+
+def test_a_huge_seed_in_the_scene_is_refused_when_loading(write_scene, scene_data, tmp_path):
+    scene_data["render"]["seed"] = 2**64
+    done = run_cli("render", write_scene(scene_data), "--out", tmp_path / "x.exr")
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    assert "render.seed: must be at most 18446744073709551615, found 18446744073709551616" in done.stderr
+
+
+BAD_OPTIONS = {
+    "seed above 2⁶⁴ − 1": (["--seed", 2**64], "--seed: must be at most 18446744073709551615"),
+    "negative seed": (["--seed", -1], "--seed: must be at least 0"),
+    "no samples": (["--spp", 0], "--spp: must be at least 1, found 0"),
+    "no threads": (["--threads", 0], "--threads: must be at least 1"),
+    "timeout nan": (["--workers", 1, "--timeout", "nan"], "--timeout: must be a positive number of seconds, found nan"),
+    "negative timeout": (["--workers", 1, "--timeout", -5],
+                         "--timeout: must be a positive number of seconds, found -5"),
+    "no workers": (["--workers", 0], "--workers: must be at least 1, found 0"),
+    "png as the exr": (["--out", "{tmp}/o.png"], "o.png: the file is written as EXR, so its name must end in .exr"),
+    "exr as the png": (["--png", "{tmp}/o.exr"], "o.exr: the file is written as PNG, so its name must end in .png"),
+    "out is a folder": (["--out", "{tmp}/folder.exr"], "folder.exr: it is a folder"),
+    "parent is a file": (["--out", "{tmp}/file.txt/o.exr"], "file.txt is a file, not a folder"),
+    "in /proc": (["--out", "/proc/o.exr"], "cannot write /proc/o.exr: "),
+    "png in /proc": (["--png", "/proc/o.png"], "cannot write /proc/o.png: "),
+    "stats in /proc": (["--stats", "/proc/stats.json"], "cannot write /proc/stats.json: "),
+}
+
+
+@pytest.mark.parametrize("case", BAD_OPTIONS)
+def test_bad_options_and_unwritable_outputs_are_refused_before_rendering(write_scene, tmp_path, case):
+    """Checked before the scene is even loaded: no render, exit 1, a message naming the option or the file,
+    and the existing output untouched."""
+    options, words = BAD_OPTIONS[case]
+    (tmp_path / "folder.exr").mkdir()
+    (tmp_path / "file.txt").write_text("a file")
+    keep = tmp_path / "keep.exr"
+    keep.write_bytes(b"previous render")
+    options = [str(option).format(tmp=tmp_path) for option in options]
+    if "--out" not in options:
+        options += ["--out", keep]
+    start = time.perf_counter()
+    done = run_cli("render", write_scene(), *options)
+    assert done.returncode == 1, done.stderr
+    assert words in done.stderr and "Traceback" not in done.stderr
+    assert "%" not in done.stderr and time.perf_counter() - start < 30  # no progress bar: nothing rendered
+    assert keep.read_bytes() == b"previous render"
+    assert sorted(path.name for path in tmp_path.iterdir() if path.name != "scene") == ["file.txt", "folder.exr",
+                                                                                         "keep.exr"]
+
+
+def test_an_unexpected_exception_is_an_internal_error_with_its_own_exit_code(write_scene, tmp_path, monkeypatch,
+                                                                             capsys):
+    from addon.tracer import cli, scene_io
+
+    def broken(_path):
+        raise ZeroDivisionError("a bug")
+
+    monkeypatch.setattr(scene_io, "load_scene", broken)
+    assert cli.main(["render", str(write_scene()), "--out", str(tmp_path / "x.exr")]) == cli.EXIT_CRASH == 70
+    stderr = capsys.readouterr().err
+    assert "Traceback" in stderr and "internal error: ZeroDivisionError: a bug" in stderr
+    assert "This is a bug" in stderr and "report it" in stderr
+    assert not (tmp_path / "x.exr").exists()

@@ -309,6 +309,24 @@ def test_a_worker_killed_mid_render_changes_nothing(reference, fresh_loopback):
 
 
 @pytest.mark.slow
+def test_losing_the_last_worker_mid_render_is_the_documented_error_within_the_timeout(fresh_loopback):
+    fresh_loopback.start_workers(1)
+    [victim] = fresh_loopback.workers
+    killed = {}
+
+    def progress(_film, fraction):
+        if not killed:
+            os.kill(victim.pid, signal.SIGKILL)
+            killed["at"] = time.perf_counter()
+
+    timeout = 2.0
+    with pytest.raises(SpectralError, match="every Dask worker of .* has left"):
+        distributed.render(small_scene(spp=200), scheduler=fresh_loopback.address, tile_size=5, timeout=timeout,
+                           progress=progress)
+    assert killed and time.perf_counter() - killed["at"] < timeout + 3.0
+
+
+@pytest.mark.slow
 def test_a_scheduler_without_workers_is_a_clear_error(fresh_loopback):
     start = time.perf_counter()
     with pytest.raises(SpectralError, match="has no workers") as error:
@@ -342,6 +360,54 @@ def test_cli_with_two_local_workers_writes_the_single_process_exr(write_scene, t
     assert sorted(expected) == sorted(actual)
     for channel in expected:
         assert np.array_equal(expected[channel], actual[channel]), channel
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_a_local_farm_render_stops_quietly(write_scene, tmp_path):
+    """Ctrl-C reaches every process of the terminal's group: the render stops within seconds with exit 130
+    and one line, not the hundreds of "Closed comm" tracebacks of the scheduler and the dying workers."""
+    from tests.tracer.conftest import tiny_scene_dict
+
+    data = tiny_scene_dict()
+    data["camera"].update(width=64, height=48)
+    out = tmp_path / "farm.exr"
+    process = subprocess.Popen([sys.executable, "-m", "addon.tracer", "render", str(write_scene(data)), "--out",
+                                str(out), "--workers", "2", "--spp", "2000", "--tile-size", "16"],
+                               cwd=ROOT, env=_subprocess_env(), stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    try:
+        shown = ""
+        while "%" not in shown and process.poll() is None:  # the first progress: tasks are running
+            shown += process.stderr.read(1)
+        time.sleep(1.0)
+        os.killpg(process.pid, signal.SIGINT)
+        signalled = time.perf_counter()
+        stderr = process.communicate(timeout=60)[1]
+    finally:
+        _stop(process)
+    assert process.returncode == cli.EXIT_INTERRUPTED, stderr
+    assert time.perf_counter() - signalled < 10.0
+    assert "interrupted: nothing written" in stderr
+    assert "Traceback" not in stderr and "Closed comm" not in stderr, stderr[-2000:]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(("options", "words"), [
+    ({"timeout": float("nan")}, "the Dask time-out: expected a finite number, found nan"),
+    ({"timeout": -5}, r"the Dask time-out \(seconds\): must be positive, found -5"),
+])
+def test_bad_time_outs_are_named_before_connecting(options, words):
+    """NaN was reported as a service that "does not speak the Dask protocol", −5 without a reason."""
+    with pytest.raises(SpectralError, match=words):
+        distributed.render(small_scene(), scheduler="tcp://127.0.0.1:9", **options)
+
+
+def test_bad_overrides_are_refused_like_the_scenes_own_settings():
+    farm = distributed.RenderFarm.__new__(distributed.RenderFarm)  # no cluster: refused before any Dask call
+    with pytest.raises(SpectralError, match="render.seed: must be at most 18446744073709551615"):
+        farm.render(small_scene(), seed=2**64)
+    with pytest.raises(SpectralError, match="render.spp: must be at least 1, found 0"):
+        farm.render(small_scene(), spp=0)
 
 
 def test_cli_rejects_distributed_options_without_a_farm(write_scene, tmp_path, capsys):

@@ -114,6 +114,26 @@ def test_missing_corrupt_and_misnamed_files(tmp_path):
         load_grid(tmp_path / "grid.raw")
 
 
+def test_an_npy_header_promising_more_than_the_file_holds_is_refused_before_reading(tmp_path):
+    """A header claiming 100000³ float32 values (3.55 PiB) on a file of a few bytes: refused from the header,
+    not by an allocation of 3.55 PiB."""
+    path = tmp_path / "huge.npy"
+    with open(path, "wb") as file:
+        np.lib.format.write_array_header_1_0(file, {"descr": "<f4", "fortran_order": False,
+                                                    "shape": (100000, 100000, 100000)})
+        file.write(b"\0" * 64)
+    with pytest.raises(SpectralError, match=r"huge.npy cannot be read: it is truncated .*100000×100000×100000 "
+                                            r"values, 3.55 PiB; the file holds 64 bytes"):
+        load_grid(path, index_to_world=np.eye(4))
+
+
+def test_an_npy_grid_larger_than_memory_is_refused_with_its_size(tmp_path, monkeypatch):
+    path = write_npy(tmp_path, np.ones((40, 30, 20), dtype=np.float64))
+    monkeypatch.setattr(grids, "available_memory", lambda: 100_000)
+    with pytest.raises(SpectralError, match=r"its 40×30×20 voxels need 281 KiB of memory, more than the 97.7 KiB"):
+        load_grid(path, index_to_world=np.eye(4))
+
+
 @pytest.mark.parametrize(
     ("matrix", "words"),
     [

@@ -176,5 +176,5 @@ def test_bands_together_estimate_the_whole_spectrum():
 
 
 def test_more_wavelengths_per_path_than_the_kernels_carry_is_refused():
-    with pytest.raises(SpectralError, match="wavelengths per path must be between 1 and 4"):
+    with pytest.raises(SpectralError, match="render.wavelengths_per_path: must be 1 or 4, found 8"):
         render(furnace(spp=1, wavelengths_per_path=8))

@@ -183,6 +183,7 @@ BAD = [
     ("camera.width", True, ["camera.width: expected a whole number"]),
     ("camera.width", 10**12, ["camera: a 1000000000000×6 film needs", "GiB of memory"]),
     ("camera.height", 10**11, ["camera: a 8×100000000000 film needs", "GiB"]),
+    ("camera.height", 10**120, ["camera: a 8×1000000000", "… film needs more than 1e15 GiB of memory"]),
     ("camera.kind", "fisheye", ["camera.kind", "'fisheye'", "perspective, orthographic"]),
     ("camera.fov", 180, ["camera.fov: must be within (0, 180)"]),
     ("camera.sensor_fit", "auto", ["camera.sensor_fit", "AUTO, HORIZONTAL, VERTICAL"]),
@@ -201,9 +202,10 @@ BAD = [
     ("media[0].albedo", {"densities": [0], "spectra": [0.5], "mode": 1}, ["media[0].albedo: unknown field 'mode'"]),
     ("media[0].albedo", {"densities": [-1], "spectra": [0.5]},
      ["media[0].albedo.densities[0]: must be within [0, inf]"]),
-    ("media[0].anisotropy", 1.0, ["media[0].anisotropy: |g| must be below 1, found 1 at"]),
+    ("media[0].anisotropy", 1.0, ["media[0].anisotropy: |g| must be at most 0.999999", "found 1 at"]),
     ("media[0].anisotropy", {"type": "table", "wavelengths": [400, 700], "values": [0, -1.2]},
-     ["media[0].anisotropy: |g| must be below 1, found -1.2 at 700 nm"]),
+     ["media[0].anisotropy: |g| must be at most 0.999999", "found -1.2 at 700 nm"]),
+    ("media[0].anisotropy", 0.9999999999, ["media[0].anisotropy: |g| must be at most", "found 0.9999999999 at"]),
     ("media[0].extinction", -0.5, ["media[0].extinction: extinction must not be negative, found -0.5"]),
     ("media[0].extinction", {"type": "sparkle"}, ["media[0].extinction", "'sparkle'"]),
     ("media[0].extinction", {"type": "gaussian", "peak": "blue", "width": 10}, ["media[0].extinction"]),
@@ -266,6 +268,14 @@ BAD = [
     ("render", {"lambda_min": 500, "lambda_max": 500}, ["render: the wavelength range 500–500 nm is empty"]),
     ("render.bands", 0, ["render.bands: must be at least 1, found 0"]),
     ("render.wavelengths_per_path", 2, ["render.wavelengths_per_path: must be 1 or 4, found 2"]),
+    ("render.seed", 2**64, ["render.seed: must be at most 18446744073709551615"]),
+    ("media[0]", {"density": {"file": "density.npy", "index_to_world": np.eye(4).tolist()}, "density_scale": 1e6,
+                  "extinction": 1e6, "albedo": 0.9},
+     ["media[0]: the optical depth through the medium reaches 5.39e+12", "more than the 100000 the tracer accepts"]),
+    ("media[0].extinction", 10**400, ["media[0].extinction: the number (about 401 digits) is too large"]),
+    ("media[0].density_scale", 10**400, ["media[0].density_scale: expected a finite number, found 1000"]),
+    ("media[0].extinction", {"type": "gaussian", "peak": 550, "width": 50, "heigth": 0.5},
+     ["media[0].extinction: unknown field 'heigth' in a spectrum of type 'gaussian'"]),
 ]
 
 
@@ -301,7 +311,10 @@ def test_bad_grid_contents_are_named_with_the_json_path(write_scene, scene_data,
         ('{"format": 1, "format": 2}', ["'format' appears twice"]),
         ("[1, 2]", ["scene: expected an object"]),
         (b"\xff\xfe\x00", ["cannot be read"]),
+        ("[" * 100_000 + "]" * 100_000, ["nests its lists and objects too deeply"]),
+        ('{"format": ' + "7" * 5000 + "}", ["cannot be read as JSON", "5000 digits"]),
     ],
+    ids=["truncated", "NaN", "duplicate key", "not an object", "not UTF-8", "nested 100000 deep", "5000 digits"],
 )
 def test_unreadable_scene_files(tmp_path, text, words):
     path = tmp_path / "scene.json"
@@ -348,3 +361,62 @@ def test_any_wrong_value_anywhere_is_a_spectral_error(write_scene, junk):
             load_scene(write_scene(data))
         except SpectralError:
             pass
+
+
+# ---------------------------------------------------------------------------------------------- Scene.validate
+
+
+INVALID_SCENES = {
+    # what: (change to the full scene, words of the message)
+    "albedo above 1": (lambda s: _medium(s, albedo_table=np.full((1, GRID.size), 1.5), albedo_densities=np.zeros(1)),
+                       "media[0].albedo: albedo must be within [0, 1], found 1.5"),
+    "g above 1": (lambda s: _medium(s, anisotropy=spectra.constant(1.2)), "media[0].anisotropy: |g| must be at most"),
+    "phase": (lambda s: _medium(s, phase="mie"), "media[0].phase: unknown value 'mie'"),
+    "no lights": (lambda s: dataclasses.replace(s, lights=(), media=(dataclasses.replace(s.media[0], emission=None),)),
+                  "lights: the scene has no lights"),
+    "dark lights": (lambda s: dataclasses.replace(s, lights=tuple(dataclasses.replace(light, strength=0.0)
+                                                                  for light in s.lights)),
+                    "lights: every light has strength 0"),
+    "light kind": (lambda s: dataclasses.replace(s, lights=(dataclasses.replace(s.lights[0], kind="area"),)),
+                   "lights[0].kind: unknown value 'area'"),
+    "zero light": (lambda s: dataclasses.replace(s, lights=(dataclasses.replace(s.lights[0],
+                                                                                spectrum=spectra.constant(0.0)),)),
+                   "lights[0].spectrum: the light's spectrum is zero everywhere"),
+    "no excitation": (lambda s: _medium(s, fluorescence=dataclasses.replace(s.media[0].fluorescence,
+                                                                              excitation=spectra.constant(0.0))),
+                      "media[0].fluorescence.excitation: the excitation spectrum is zero everywhere"),
+    "3 wavelengths": (lambda s: _settings(s, wavelengths_per_path=3), "render.wavelengths_per_path: must be 1 or 4"),
+    "seed": (lambda s: _settings(s, seed=2**64), "render.seed: must be at most 18446744073709551615"),
+    "backend": (lambda s: _settings(s, backend="cuda"), "render.backend: unknown value 'cuda'"),
+    "optical depth": (lambda s: _medium(s, density_scale=1e12), "media[0]: the optical depth through the medium"),
+    "fov": (lambda s: dataclasses.replace(s, camera=dataclasses.replace(s.camera, fov=np.pi)),
+            "camera.fov: must be within (0, 180), found 180"),
+}
+
+
+def _medium(scene, **changes):
+    return dataclasses.replace(scene, media=(dataclasses.replace(scene.media[0], **changes), *scene.media[1:]))
+
+
+def _settings(scene, **changes):
+    return dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, **changes))
+
+
+def test_a_valid_scene_validates_to_itself():
+    scene = full_scene()
+    assert scene.validate() is scene
+
+
+@pytest.mark.parametrize("case", INVALID_SCENES)
+def test_one_validation_for_load_save_and_compile(tmp_path, case):
+    """A Scene built in code is checked by the rules of the file format: compile and save refuse it (and save
+    writes nothing), so nothing can write a scene file that load_scene refuses."""
+    from addon.tracer.compile import compile_scene
+
+    change, words = INVALID_SCENES[case]
+    scene = change(full_scene())
+    for action in (scene.validate, lambda: compile_scene(scene), lambda: save_scene(scene, tmp_path / "out")):
+        with pytest.raises(SpectralError) as error:
+            action()
+        assert words in str(error.value)
+    assert not (tmp_path / "out").exists()

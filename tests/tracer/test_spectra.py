@@ -200,6 +200,16 @@ BAD_SPECS = {
     "nested error": ({"type": "sum", "of": [1, {"type": "scale", "of": {"type": "x"}, "factor": 2}]},
                      r"light\.colour\.of\[1\]\.of: unknown spectrum type 'x'"),
     "missing csv": ({"type": "csv", "path": "nowhere.csv"}, r"cannot read spectrum file .*nowhere.csv"),
+    "misspelt field": ({"type": "gaussian", "peak": 550, "width": 50, "heigth": 0.5},
+                       r"light\.colour: unknown field 'heigth' in a spectrum of type 'gaussian' "
+                       r"\(allowed: type, peak, width, height\)"),
+    "field of another type": ({"type": "constant", "value": 1, "of": 2}, r"unknown field 'of'"),
+    "huge integer": (10**400, r"light\.colour: the number \(about 401 digits\) is too large"),
+    "huge integer field": ({"type": "scale", "of": 1, "factor": -10**400}, r"'factor' .* is too large"),
+    "huge integer in a table": ({"type": "table", "wavelengths": [400, 500], "values": [1, 10**400]},
+                                r"values must be a list of numbers"),
+    "deep nesting": (json.loads('{"type": "scale", "factor": 1, "of": ' * 600 + "1" + "}" * 600),
+                     r"light\.colour(\.of){32}: spectra are nested more than 32 deep"),
 }
 
 

@@ -1,0 +1,110 @@
+"""Checks of single values, each raising a SpectralError that starts with `where` (a scene-file path such
+as `media[0].albedo`, or a command-line option) and shows the offending value.
+
+Shared by the scene file reader (types) and `Scene.validate` (ranges), so that a rule and its message
+are written once.
+"""
+
+import numpy as np
+
+from .errors import SpectralError
+from .wavelengths import GRID
+
+
+def shown(value, limit: int = 80) -> str:
+    """`repr(value)`, shortened to about `limit` characters (a huge or deeply nested value stays readable)."""
+    try:
+        text = repr(value)
+    except (RecursionError, ValueError):  # nesting beyond the interpreter's limit; ints over 4300 digits
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+_BYTE_UNITS = {"PiB": 2**50, "TiB": 2**40, "GiB": 2**30, "MiB": 2**20, "KiB": 2**10}
+
+
+def byte_size(count: int, unit: str | None = None) -> str:
+    """A number of bytes for people: "3.55 PiB", "281 KiB"; in `unit` ("GiB", ...) when given."""
+    if unit is None:
+        unit = next((name for name, scale in _BYTE_UNITS.items() if count >= scale), None)
+        if unit is None:
+            return f"{count} bytes"
+    if count >= 2**1000 or count / _BYTE_UNITS[unit] >= 1e15:  # integers from JSON have no size limit
+        return f"more than 1e15 {unit}"
+    value = count / _BYTE_UNITS[unit]
+    return f"{value:.3g} {unit}" if value < 1000 else f"{value:.0f} {unit}"
+
+
+def number(value, where: str) -> float:
+    """A finite real number (JSON booleans are not numbers)."""
+    try:
+        real = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+        result = float(value) if real else np.nan
+    except OverflowError:  # an integer beyond float64's range
+        result = np.nan
+    if not np.isfinite(result):
+        raise SpectralError(f"{where}: expected a finite number, found {shown(value)}")
+    return result
+
+
+def whole(value, where: str) -> int:
+    """An integer (JSON booleans are not integers)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise SpectralError(f"{where}: expected a whole number, found {shown(value)}")
+    return int(value)
+
+
+def within(value: float, where: str, low: float = -np.inf, high: float = np.inf, closed: bool = True) -> float:
+    """`value` if it lies in [low, high] (or (low, high) when not `closed`)."""
+    inside = low <= value <= high if closed else low < value < high
+    if not inside:
+        brackets = "[]" if closed else "()"
+        raise SpectralError(f"{where}: must be within {brackets[0]}{low:g}, {high:g}{brackets[1]}, found {value:g}")
+    return value
+
+
+def positive(value: float, where: str) -> float:
+    if not value > 0:
+        raise SpectralError(f"{where}: must be positive, found {value:g}")
+    return value
+
+
+def whole_within(value, where: str, minimum: int, maximum: int | None = None) -> int:
+    """An integer of at least `minimum` (and at most `maximum`, when given)."""
+    value = whole(value, where)
+    if value < minimum:
+        raise SpectralError(f"{where}: must be at least {minimum}, found {value}")
+    if maximum is not None and value > maximum:
+        raise SpectralError(f"{where}: must be at most {maximum}, found {shown(value, 40)}")
+    return value
+
+
+def one_of(value, where: str, allowed: tuple):
+    if isinstance(value, (dict, list)) or value not in allowed:
+        raise SpectralError(f"{where}: unknown value {shown(value)} (allowed: {', '.join(map(str, allowed))})")
+    return value
+
+
+def spectrum_within(values: np.ndarray, where: str, rule: str, low: float, high: float, closed: bool = True) -> None:
+    """Error naming the worst value of a spectrum on GRID outside [low, high] (or the open interval) and
+    its wavelength; `rule` says the rule in words."""
+    outside = (values < low) | (values > high) if closed else (values <= low) | (values >= high)
+    if outside.any():
+        excess = np.where(outside, np.maximum(low - values, values - high), -np.inf)
+        worst = int(np.argmax(excess))
+        raise SpectralError(f"{where}: {rule}, found {values[worst]:.10g} at {GRID[worst]:g} nm")
+
+
+def vector(value, where: str) -> np.ndarray:
+    """A list (or array) of 3 finite numbers as a float64 array."""
+    if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 3:
+        raise SpectralError(f"{where}: expected a list of 3 numbers, found {shown(value)}")
+    return np.array([number(c, f"{where}[{i}]") for i, c in enumerate(value)])
+
+
+def direction(value, where: str) -> np.ndarray:
+    """A 3-vector of non-zero length (not normalised)."""
+    result = vector(value, where)
+    if not np.linalg.norm(result) > 0:
+        raise SpectralError(f"{where}: a direction cannot have zero length")
+    return result

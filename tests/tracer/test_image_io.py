@@ -1,0 +1,58 @@
+"""Writing images: every output of one command is written, or none is, and failures name the file."""
+
+import errno
+
+import numpy as np
+import pytest
+
+from addon.tracer import image_io
+from addon.tracer.errors import SpectralError
+
+XYZ = np.random.default_rng(1).random((4, 5, 3))
+
+
+def test_outputs_are_written_together(tmp_path):
+    written = image_io.write_all([image_io.exr(tmp_path / "a" / "image.exr", XYZ, XYZ, XYZ),
+                                  image_io.png(tmp_path / "image.png", XYZ), image_io.npy(tmp_path / "xyz.npy", XYZ),
+                                  image_io.text(tmp_path / "stats.json", "{}")])
+    assert [path.name for path in written] == ["image.exr", "image.png", "xyz.npy", "stats.json"]
+    np.testing.assert_allclose(image_io.read_exr(written[0])["spectral.Y"], XYZ[..., 1], rtol=1e-6)
+    assert np.array_equal(np.load(written[2]), XYZ.astype(np.float32))
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["a", "image.png", "stats.json", "xyz.npy"]
+
+
+def test_a_failing_output_leaves_every_file_as_it_was(tmp_path):
+    """The EXR is written first and succeeds; the next output fails (a full disk): the existing EXR keeps
+    its old contents, no temporary file stays, and the folder made for the failed output is removed."""
+    keep = tmp_path / "keep.exr"
+    keep.write_bytes(b"previous render")
+
+    def full_disk(_name):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    failing = image_io.Output(tmp_path / "new" / "deeper" / "stats.json", full_disk)
+    with pytest.raises(SpectralError, match=r"cannot write .*new/deeper/stats.json: No space left on device"):
+        image_io.write_all([image_io.exr(keep, XYZ, XYZ), failing])
+    assert keep.read_bytes() == b"previous render"
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["keep.exr"]
+
+
+@pytest.mark.parametrize(("name", "words"), [
+    ("image.png", "image.png: the file is written as EXR, so its name must end in .exr"),
+    ("folder", "folder: the file is written as EXR"),
+])
+def test_an_exr_needs_its_suffix(tmp_path, name, words):
+    with pytest.raises(SpectralError, match=words):
+        image_io.write_exr(tmp_path / name, XYZ, XYZ)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_destinations_are_checked_without_leaving_anything(tmp_path):
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "dir.exr").mkdir()
+    assert image_io.check_destination(tmp_path / "new" / "folders" / "x.exr", ".exr").name == "x.exr"
+    for path, words in [(tmp_path / "file" / "x.exr", "is a file, not a folder"),
+                        (tmp_path / "dir.exr", "it is a folder"), ("/proc/x.exr", "cannot write /proc/x.exr")]:
+        with pytest.raises(SpectralError, match=words):
+            image_io.check_destination(path, ".exr")
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["dir.exr", "file"]
