@@ -7,6 +7,7 @@ fixtures, even when a test fails. Scenes are tiny: the machine running CI may ha
 
 import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -377,7 +378,8 @@ def test_ctrl_c_during_a_local_farm_render_stops_quietly(write_scene, tmp_path):
                                start_new_session=True)
     try:
         shown = ""
-        while "%" not in shown and process.poll() is None:  # the first progress: tasks are running
+        # The first progress above 0 %: the farm is up and tasks are running (the bar shows 0 % at once).
+        while not re.search(r"\] +(0\.[1-9]|[1-9][0-9.]*)%", shown) and process.poll() is None:
             shown += process.stderr.read(1)
         time.sleep(1.0)
         os.killpg(process.pid, signal.SIGINT)
