@@ -31,7 +31,8 @@ def draw_emulation(layout, scene) -> None:
         layout.prop(settings, "emulation_bands")
     layout.prop(settings, "emulation_shader")
     layout.label(text="Render to Image or the command line (F12 renders nothing)", icon="INFO")
-    layout.label(text="Fluorescence: absorption only, no re-emission (a dyed test cloud: ΔE00 20 from the tracer)", icon="ERROR")
+    layout.label(text="Fluorescence: absorption only, no re-emission (a dyed test cloud: ΔE00 20 from the tracer)",
+                 icon="ERROR")
     layout.label(text="Surfaces: RGB colors upsampled; textures gray", icon="INFO")
 
 
