@@ -147,6 +147,21 @@ def test_the_default_timeout_is_the_documented_one():
 # ------------------------------------------------------------------------------ a real loopback cluster
 
 
+# `python -m addon.tracer` with Ctrl-C raising KeyboardInterrupt, as in a terminal, whatever SIGINT
+# disposition the test process passes on (an ignored SIGINT is inherited through exec).
+AS_IN_A_TERMINAL = ("import runpy, signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
+                    "runpy.run_module('addon.tracer', run_name='__main__', alter_sys=True)")
+
+
+def _signal_masks(pid: int) -> str:
+    """The process's ignored and caught signal masks (Linux), to say why a signal went unanswered."""
+    try:
+        lines = Path(f"/proc/{pid}/status").read_text().splitlines()
+    except OSError:
+        return "no /proc status"
+    return "; ".join(line for line in lines if line.startswith(("SigIgn", "SigCgt", "SigBlk")))
+
+
 def _subprocess_env() -> dict:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p])
@@ -372,7 +387,7 @@ def test_ctrl_c_during_a_local_farm_render_stops_quietly(write_scene, tmp_path):
     data = tiny_scene_dict()
     data["camera"].update(width=64, height=48)
     out = tmp_path / "farm.exr"
-    process = subprocess.Popen([sys.executable, "-m", "addon.tracer", "render", str(write_scene(data)), "--out",
+    process = subprocess.Popen([sys.executable, "-c", AS_IN_A_TERMINAL, "render", str(write_scene(data)), "--out",
                                 str(out), "--workers", "2", "--spp", "2000", "--tile-size", "16"],
                                cwd=ROOT, env=_subprocess_env(), stderr=subprocess.PIPE, text=True,
                                start_new_session=True)
@@ -382,12 +397,13 @@ def test_ctrl_c_during_a_local_farm_render_stops_quietly(write_scene, tmp_path):
         while not re.search(r"\] +(0\.[1-9]|[1-9][0-9.]*)%", shown) and process.poll() is None:
             shown += process.stderr.read(1)
         time.sleep(1.0)
+        dispositions = _signal_masks(process.pid)
         os.killpg(process.pid, signal.SIGINT)
         signalled = time.perf_counter()
         stderr = process.communicate(timeout=60)[1]
     finally:
         _stop(process)
-    assert process.returncode == cli.EXIT_INTERRUPTED, stderr
+    assert process.returncode == cli.EXIT_INTERRUPTED, f"{dispositions}\n{stderr[-3000:]}"
     assert time.perf_counter() - signalled < 10.0
     assert "interrupted: nothing written" in stderr
     assert "Traceback" not in stderr and "Closed comm" not in stderr, stderr[-2000:]
