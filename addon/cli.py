@@ -25,7 +25,8 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=prog, description="Render a .blend file with the spectral volume tracer "
                                      "(or its Cycles emulation, when the scene's Render settings choose it)")
     parser.add_argument("blend", type=Path, help=".blend file to render")
-    parser.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (XYZ, RGB, variance)")
+    parser.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (Combined, XYZ, "
+                        "XYZ Variance passes, named as F12's)")
     parser.add_argument("--scene", help="scene of the file to render (default: the file's active scene)")
     parser.add_argument("--frame", type=int, help="frame to render (default: the file's current frame)")
     parser.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
@@ -81,6 +82,8 @@ def check_frame(frame: int) -> int:
 
 def render_blend(args) -> str:
     """Open, export, render and write; returns a one-line summary. Raises SpectralError on bad input."""
+    import bpy
+
     from . import dispatch
 
     if args.spp is not None and args.spp < 1:
@@ -101,7 +104,7 @@ def render_blend(args) -> str:
     for warning in warnings:
         print(f"warning: {warning}", file=sys.stderr)
     film = result.film
-    image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
+    image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance, layer=bpy.context.view_layer.name)
     spp = settings.samples if args.spp is None else args.spp
     return (f"wrote {args.out} ({film.width}×{film.height}, frame {scene.frame_current}, "
             f"{spp} spp, {how}, {result.seconds:.1f} s)")

@@ -22,9 +22,9 @@ def store_image(name: str, rgb):
     return image
 
 
-def write_outputs(film, image_name: str, exr_path: str = ""):
-    """The EXR first (written to a temporary name and renamed, so a failure leaves the old file), then the
-    image; returns the image."""
+def write_outputs(film, image_name: str, exr_path: str = "", layer: str = image_io.VIEW_LAYER):
+    """The EXR (its passes in the render layer `layer`, as F12 names them) first, written to a temporary
+    name and renamed, so a failure leaves the old file; then the image. Returns the image."""
     if exr_path:
-        image_io.write_exr(bpy.path.abspath(exr_path), film.xyz, film.rgb(), film.variance)
+        image_io.write_exr(bpy.path.abspath(exr_path), film.xyz, film.rgb(), film.variance, layer=layer)
     return store_image(image_name, film.rgb())

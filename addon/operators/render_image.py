@@ -27,7 +27,8 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     image_name: bpy.props.StringProperty(name="Image", default="Spectral Render",
                                          description="Float image to render into (created when missing)")
     exr_path: bpy.props.StringProperty(name="EXR File", subtype="FILE_PATH",
-                                       description="Also write a multilayer EXR (XYZ, RGB, variance); empty: none")
+                                       description="Also write a multilayer EXR with F12's passes (Combined, XYZ, "
+                                                   "XYZ Variance); empty: none")
 
     _job = None
     _timer = None
@@ -62,7 +63,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             context.workspace.status_text_set(message)
             self._message = message
 
-    def _finish(self, job: RenderJob) -> set:
+    def _finish(self, context, job: RenderJob) -> set:
         self._report_warnings()
         if job.error is not None:
             self.report({"ERROR"}, f"Render failed, nothing written: {job.error}")
@@ -71,7 +72,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             self.report({"WARNING"}, "Render cancelled, nothing written")
             return {"CANCELLED"}
         try:
-            image = write_outputs(job.result.film, self.image_name, self.exr_path)
+            image = write_outputs(job.result.film, self.image_name, self.exr_path, context.view_layer.name)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Render not saved: {problem}")
             return {"CANCELLED"}
@@ -83,7 +84,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         if job is None:
             return {"CANCELLED"}
         job.run()
-        return self._finish(job)
+        return self._finish(context, job)
 
     def invoke(self, context, event):
         job = self._start(context)
@@ -110,7 +111,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         context.window_manager.event_timer_remove(self._timer)
         context.window_manager.progress_end()
         self._show_message(context, None)
-        return self._finish(self._job)
+        return self._finish(context, self._job)
 
 
 CLASSES = (SPECTRAL_OT_render_image,)

@@ -105,5 +105,5 @@ def test_cli_renders_the_animated_sun_of_the_frame_asked_for(registered, tmp_pat
                                "--frame", str(frame), "--quiet"], cwd=ROOT, capture_output=True, text=True,
                               timeout=600)
         assert done.returncode == 0, done.stderr
-    y1, y2 = (image_io.read_exr(tmp_path / f"{frame}.exr")["spectral.Y"] for frame in (1, 2))
+    y1, y2 = (image_io.read_exr(tmp_path / f"{frame}.exr")["ViewLayer.XYZ.Y"] for frame in (1, 2))
     assert 2.97 < _brightness_ratio(y1, y2) < 3.03
