@@ -84,7 +84,7 @@ def render_blend(args) -> str:
     """Open, export, render and write; returns a one-line summary. Raises SpectralError on bad input."""
     import bpy
 
-    from . import dispatch
+    from . import dispatch, image_output
 
     if args.spp is not None and args.spp < 1:
         raise SpectralError(f"--spp must be at least 1, got {args.spp}")
@@ -93,6 +93,7 @@ def render_blend(args) -> str:
     image_io.check_destination(args.out, ".exr")
     scene = open_scene(args.blend, args.scene)
     export = export_context_scene(args.frame)
+    region = image_output.placement(scene)
     settings = scene.spectral
     if settings.renderer == "CYCLES":
         result, warnings, how = _emulate(scene, export, args.spp)
@@ -104,7 +105,7 @@ def render_blend(args) -> str:
     for warning in warnings:
         print(f"warning: {warning}", file=sys.stderr)
     film = result.film
-    image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance, layer=bpy.context.view_layer.name)
+    image_io.write_all([image_output.exr(args.out, image_output.passes(film, region), bpy.context.view_layer.name)])
     spp = settings.samples if args.spp is None else args.spp
     return (f"wrote {args.out} ({film.width}×{film.height}, frame {scene.frame_current}, "
             f"{spp} spp, {how}, {result.seconds:.1f} s)")

@@ -11,7 +11,7 @@ import bpy
 
 from ..cycles_emulation.job import EmulationJob, emulation_job
 from ..export.scene import export_scene
-from ..image_output import write_outputs
+from ..image_output import placement, write_outputs
 from ..render_job import RenderJob
 from ..tracer.errors import SpectralError
 
@@ -35,11 +35,13 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     _warnings = ()
     _warnings_shown = 0
     _message = None
+    _region = None  # where the film goes in the image (image_output.placement), as exported
 
     def _start(self, context) -> RenderJob | EmulationJob | None:
         settings = context.scene.spectral
         try:
             export = export_scene(context.evaluated_depsgraph_get())
+            self._region = placement(context.scene)
             job = (emulation_job(context.scene, export) if settings.renderer == "CYCLES"
                    else RenderJob(export.scene, settings.scheduler_address))
         except SpectralError as problem:
@@ -72,7 +74,8 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             self.report({"WARNING"}, "Render cancelled, nothing written")
             return {"CANCELLED"}
         try:
-            image = write_outputs(job.result.film, self.image_name, self.exr_path, context.view_layer.name)
+            image = write_outputs(job.result.film, self.image_name, self.exr_path, context.view_layer.name,
+                                  self._region)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Render not saved: {problem}")
             return {"CANCELLED"}

@@ -67,6 +67,35 @@ def test_f12_renders_the_render_region(registered, tmp_path, crop):
     assert y.max() > 0
 
 
+@pytest.mark.parametrize("crop", [False, True])
+def test_render_to_image_and_the_cli_place_the_render_region_as_f12(registered, tmp_path, crop):
+    """Crop off: the full frame with the region in place, empty (alpha 0) outside; crop on: the region
+    alone. Before, Render to Image and the CLI wrote the region alone either way."""
+    scene, _cloud = basic_scene(tmp_path)
+    render = scene.render
+    render.engine = "SPECTRAL_VOLUME"
+    render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    render.filepath = str(tmp_path / "f12.exr")
+    render.use_border, render.use_crop_to_border = True, crop
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.33, 0.77, 0.1, 0.55
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    assert bpy.ops.spectral.render_image(image_name="Spectral", exr_path=str(tmp_path / "image.exr")) == {"FINISHED"}
+    blend = tmp_path / "region.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    done = _run_cli("render", blend, "--out", tmp_path / "cli.exr", "--quiet")
+    assert done.returncode == 0, done.stderr
+    f12 = image_io.read_exr(tmp_path / "f12.exr")
+    alpha = f12["ViewLayer.Combined.A"]
+    assert alpha.shape == ((5, 7) if crop else (12, 16)) and alpha.min() == (1.0 if crop else 0.0)
+    for written in ("image.exr", "cli.exr"):
+        channels = image_io.read_exr(tmp_path / written)
+        for name in ("ViewLayer.Combined.A", "ViewLayer.Combined.R", "ViewLayer.XYZ.Y", "ViewLayer.XYZ Variance.Z"):
+            np.testing.assert_allclose(channels[name], f12[name], rtol=1e-4, atol=1e-6, err_msg=f"{written} {name}")
+    image = bpy.data.images["Spectral"]
+    pixels = np.array(image.pixels[:], dtype=np.float32).reshape(*alpha.shape, 4)[::-1]
+    np.testing.assert_array_equal(pixels[..., 3], alpha)
+
+
 def test_f12_with_bad_input_reports_and_keeps_the_old_file(registered, tmp_path):
     scene, cloud = basic_scene(tmp_path)
     cloud.data.filepath = str(tmp_path / "gone.vdb")
