@@ -8,7 +8,7 @@ from bpy_extras.io_utils import ImportHelper
 
 from ..importer import import_scene
 from ..tracer.errors import SpectralError
-from ..tracer.scene_io import load_scene
+from ..tracer.scene_io import SCENE_FILE, load_scene
 
 DATA_FOLDER = "blender_data"  # default: beside scene.json
 
@@ -29,6 +29,7 @@ class SPECTRAL_OT_import_scene(bpy.types.Operator, ImportHelper):
 
     def execute(self, context):
         path = Path(self.filepath)
+        path = path / SCENE_FILE if path.is_dir() else path  # the folder itself chosen
         folder = Path(bpy.path.abspath(self.data_folder)) if self.data_folder else path.parent / DATA_FOLDER
         try:
             scene = load_scene(path)

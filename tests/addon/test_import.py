@@ -91,3 +91,9 @@ def test_an_unwritable_data_folder_imports_nothing(registered, tmp_path):
     with pytest.raises(RuntimeError, match=r"Nothing imported: cannot write .*file.*is a file, not a folder"):
         bpy.ops.spectral.import_scene(filepath=str(path), data_folder=str(tmp_path / "file" / "data"))
     assert before == {name: len(getattr(bpy.data, name)) for name in before}
+
+
+def test_the_chosen_folder_imports_its_scene_json(registered, tmp_path):
+    path = save_scene(_every_feature(), tmp_path / "clouds")
+    assert bpy.ops.spectral.import_scene(filepath=str(path.parent)) == {"FINISHED"}
+    assert bpy.context.scene.name == "clouds" and (tmp_path / "clouds" / "blender_data" / "Fire.vdb").is_file()
