@@ -134,3 +134,20 @@ def test_frames_render_at_the_size_asked_for_each_to_its_own_files(registered, t
         "frame_002.exr", "frame_004.exr", "frame_005.exr", "preview_2.png", "preview_4.png", "preview_5.png"]
     assert done.stdout.count("wrote ") == 3 and "(10×5, frame 4," in done.stdout
     assert image_io.read_exr(tmp_path / "out" / "frame_005.exr")["ViewLayer.XYZ.Y"].shape == (5, 10)
+
+
+@pytest.mark.slow
+def test_a_later_frame_that_fails_is_named_and_the_earlier_frames_kept(registered, tmp_path):
+    from tests.addon.builders import basic_scene
+
+    scene, _cloud = basic_scene(tmp_path)
+    scene.spectral.lambda_max = 830.0
+    for frame, shortest in ((1, 360.0), (2, 830.0)):  # at frame 2 the wavelength range is empty
+        scene.spectral.lambda_min = shortest
+        scene.spectral.keyframe_insert("lambda_min", frame=frame)
+    blend = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    done = run_cli(blend, "--frames", "1-3", "--spp", 1, "--out", tmp_path / "out" / "f_#.exr", "--quiet")
+    assert done.returncode == 1, done.stderr
+    assert "error: frame 2: render settings: the wavelength range 830–830 nm is empty" in done.stderr
+    assert "wrote" in done.stdout and sorted(path.name for path in (tmp_path / "out").iterdir()) == ["f_1.exr"]
