@@ -1,7 +1,12 @@
-"""Headless rendering of a .blend file to a multilayer EXR.
+"""Headless rendering of a .blend file to multilayer EXRs (and PNGs), one frame or many, as `blender -b -f/-a`.
 
-    python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N] [--spp N] [--scheduler ADDRESS]
+    python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N | --frames 1-250,300]
+        [--resolution WxH] [--percentage N] [--png OUT.png] [--spp N] [--scheduler ADDRESS] [--quiet]
     blender -c spectral_render FILE.blend --out OUT.exr [...]   (the same, with the extension installed)
+
+Output paths take `#` frame-number placeholders (`out/frame_####.exr`), needed when rendering several
+frames. Every option is checked before the file is opened; each frame's files are written together
+(`image_io.write_all`) when that frame is done, so a failure at a later frame keeps the earlier ones.
 
 Blender command ids must be Python identifiers, hence `spectral_render`. Exit codes as the tracer's
 command line (`addon.tracer.cli`): 0 success, 1 bad input (message on stderr, nothing written),
@@ -12,6 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .frame_options import check_frame_paths, frame_path, parse_frames, parse_resolution
 from .tracer import image_io
 from .tracer.cli import EXIT_OK, ProgressBar, run_reporting
 from .tracer.errors import SpectralError
@@ -25,9 +31,17 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=prog, description="Render a .blend file with the spectral volume tracer "
                                      "(or its Cycles emulation, when the scene's Render settings choose it)")
     parser.add_argument("blend", type=Path, help=".blend file to render")
-    parser.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (XYZ, RGB, variance)")
+    parser.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (Combined, XYZ, "
+                        "XYZ Variance passes, named as F12's); '#'s are replaced by the frame number")
+    parser.add_argument("--png", type=Path, help="also write a PNG (Standard view at the scene's exposure); "
+                        "'#'s are replaced by the frame number")
     parser.add_argument("--scene", help="scene of the file to render (default: the file's active scene)")
-    parser.add_argument("--frame", type=int, help="frame to render (default: the file's current frame)")
+    frames = parser.add_mutually_exclusive_group()
+    frames.add_argument("--frame", type=int, help="frame to render (default: the file's current frame)")
+    frames.add_argument("--frames", metavar="LIST", help="frames to render, e.g. 1-250 or 1,3,5-7 (each once, "
+                        "in that order); the output paths need a '#'")
+    parser.add_argument("--resolution", metavar="WxH", help="image size in pixels (default: the scene's)")
+    parser.add_argument("--percentage", type=int, help="resolution scale in percent (default: the scene's)")
     parser.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
     parser.add_argument("--scheduler", help="Dask scheduler tcp://HOST:PORT to render on (default: the scene's "
                                             "Render setting; empty: this computer)")
@@ -70,26 +84,68 @@ def export_context_scene(frame: int | None = None):
 
 def check_frame(frame: int) -> int:
     """`frame`, or a SpectralError when it lies outside the frames Blender has (it would clamp it)."""
-    import bpy
-
-    limits = bpy.types.Scene.bl_rna.properties["frame_current"]
-    if not limits.hard_min <= frame <= limits.hard_max:
-        raise SpectralError(f"--frame: Blender's frames run from {limits.hard_min} to {limits.hard_max}, "
-                            f"found {frame}")
+    low, high = _limits("Scene", "frame_current")
+    if not low <= frame <= high:
+        raise SpectralError(f"--frame: Blender's frames run from {low} to {high}, found {frame}")
     return frame
 
 
-def render_blend(args) -> str:
-    """Open, export, render and write; returns a one-line summary. Raises SpectralError on bad input."""
-    from . import dispatch
+def _limits(owner: str, name: str) -> tuple[int, int]:
+    """The range Blender allows for the setting `name` of `owner` (a bpy.types name)."""
+    import bpy
 
+    setting = getattr(bpy.types, owner).bl_rna.properties[name]
+    return setting.hard_min, setting.hard_max
+
+
+def _check_options(args) -> list[int] | None:
+    """Every option's value and the first frame's destinations, before the file is opened; returns the
+    frames asked for (None: the file's current frame)."""
     if args.spp is not None and args.spp < 1:
         raise SpectralError(f"--spp must be at least 1, got {args.spp}")
-    if args.frame is not None:
-        check_frame(args.frame)
-    image_io.check_destination(args.out, ".exr")
+    frames = None if args.frame is None else [check_frame(args.frame)]
+    if args.frames is not None:
+        frames = parse_frames(args.frames, _limits("Scene", "frame_current"))
+    if args.resolution is not None:
+        parse_resolution(args.resolution, _limits("RenderSettings", "resolution_x"))
+    low, high = _limits("RenderSettings", "resolution_percentage")
+    if args.percentage is not None and not low <= args.percentage <= high:
+        raise SpectralError(f"--percentage: must be from {low} to {high}, as in Blender, found {args.percentage}")
+    outputs = {"--out": args.out, "--png": args.png}
+    check_frame_paths(outputs, frames or [])
+    first = 0 if frames is None else frames[0]
+    for (option, path), suffix in zip(outputs.items(), (".exr", ".png")):
+        if path is not None:
+            image_io.check_destination(frame_path(path, first), suffix)
+    return frames
+
+
+def render_blend(args):
+    """Open, then export, render and write each frame; yields a one-line summary per frame written.
+    Raises SpectralError on bad input (naming the frame when there are several)."""
+    frames = _check_options(args)
     scene = open_scene(args.blend, args.scene)
-    export = export_context_scene(args.frame)
+    if args.resolution is not None:
+        size = parse_resolution(args.resolution, _limits("RenderSettings", "resolution_x"))
+        scene.render.resolution_x, scene.render.resolution_y = size
+    if args.percentage is not None:
+        scene.render.resolution_percentage = args.percentage
+    for frame in frames or [scene.frame_current]:
+        try:
+            yield _render_frame(scene, frame, args)
+        except SpectralError as problem:
+            if frames is None or len(frames) == 1:
+                raise
+            raise SpectralError(f"frame {frame}: {problem}") from None
+
+
+def _render_frame(scene, frame: int, args) -> str:
+    import bpy
+
+    from . import dispatch, image_output
+
+    export = export_context_scene(frame)
+    region = image_output.placement(scene)
     settings = scene.spectral
     if settings.renderer == "CYCLES":
         result, warnings, how = _emulate(scene, export, args.spp)
@@ -100,10 +156,14 @@ def render_blend(args) -> str:
         result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=bar, notice=bar and bar.notice)
     for warning in warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    film = result.film
-    image_io.write_exr(args.out, film.xyz, film.rgb(), film.variance)
+    images = image_output.passes(result.film, region)
+    outputs = [image_output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
+    if args.png is not None:
+        outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure))
+    written = image_io.write_all(outputs)
     spp = settings.samples if args.spp is None else args.spp
-    return (f"wrote {args.out} ({film.width}×{film.height}, frame {scene.frame_current}, "
+    height, width = images.alpha.shape
+    return (f"wrote {', '.join(map(str, written))} ({width}×{height}, frame {frame}, "
             f"{spp} spp, {how}, {result.seconds:.1f} s)")
 
 
@@ -122,7 +182,8 @@ def main(argv=None, prog="python -m addon.cli render") -> int:
     args = _parser(prog).parse_args(argv)
 
     def command():
-        print(render_blend(args))
+        for summary in render_blend(args):
+            print(summary, flush=True)
         return EXIT_OK
 
     return run_reporting(command)
@@ -154,8 +215,8 @@ def unregister_extras():
 def _module_main(argv) -> int:
     """`python -m addon.cli render ...`: registers the add-on in this bpy module first."""
     if not argv or argv[0] != "render":
-        print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N] [--spp N]",
-              file=sys.stderr)
+        print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N | --frames LIST] "
+              "[--resolution WxH] [--percentage N] [--png OUT.png] [--spp N]", file=sys.stderr)
         return 2
     from . import register
 

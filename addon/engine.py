@@ -27,10 +27,9 @@ from .export.scene import export_scene
 from .pixels import blender_rows, with_alpha
 from .props.render import ENGINE_ID
 from .tracer.errors import SpectralError
+from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
 from .tracer.progress import TimeLeft
 
-XYZ_PASS = "XYZ"
-VARIANCE_PASS = "XYZ Variance"
 # The Render Result is rewritten at most every RESULT_SECONDS, and less often when writing it costs more
 # than 1/RESULT_COST_RATIO of the time between writes (a 1920×1080 film takes a while to convert).
 RESULT_SECONDS = 1.0
@@ -44,9 +43,8 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     bl_use_eevee_viewport = True
 
     def update_render_passes(self, scene=None, renderlayer=None):
-        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
-        self.register_pass(scene, renderlayer, XYZ_PASS, 3, "XYZ", "COLOR")
-        self.register_pass(scene, renderlayer, VARIANCE_PASS, 3, "XYZ", "COLOR")
+        for name, channels in PASSES.items():  # the tracer's EXR names, so every EXR of a render reads alike
+            self.register_pass(scene, renderlayer, name, len(channels), channels, "COLOR")
 
     def render(self, depsgraph):
         if depsgraph.scene.original.spectral.renderer == "CYCLES":
@@ -95,10 +93,10 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
         (the variance costs most to convert: 0.2–0.5 s at 1920×1080, time a cancel would wait). Pixels go
         in with `foreach_set`: assigning `rect` took 7–10 s per pass at 1920×1080."""
         passes = result.layers[0].passes
-        passes["Combined"].rect.foreach_set(blender_rows(with_alpha(film.rgb())).ravel())
+        passes[COMBINED].rect.foreach_set(blender_rows(with_alpha(film.rgb())).ravel())
         if not preview:
-            passes[XYZ_PASS].rect.foreach_set(blender_rows(film.xyz).ravel())
-            passes[VARIANCE_PASS].rect.foreach_set(blender_rows(film.variance).ravel())
+            passes[XYZ].rect.foreach_set(blender_rows(film.xyz).ravel())
+            passes[VARIANCE].rect.foreach_set(blender_rows(film.variance).ravel())
         self.update_result(result)
 
 

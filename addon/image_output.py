@@ -1,15 +1,58 @@
-"""Where a finished render goes: a float Image datablock (linear Rec.709) and a multilayer EXR."""
+"""Where a finished render goes: a float Image datablock (linear Rec.709) and a multilayer EXR, each the
+size Blender's own render would have: with Render Region on and Crop to Render Region off, the film (the
+region) is placed in the full frame, empty (alpha 0) outside, as Blender places it."""
+
+from typing import NamedTuple
 
 import bpy
+import numpy as np
 
+from .export.camera import Region, render_region
 from .pixels import blender_rows, with_alpha
 from .tracer import image_io
 
 COLORSPACE = "Linear Rec.709"
 
 
-def store_image(name: str, rgb):
-    """Put linear Rec.709 pixels (height, width, 3; top row first) into the float Image `name`."""
+class Passes(NamedTuple):
+    """A render's passes as images (height, width, channels; top row first); alpha has no channel axis."""
+
+    xyz: np.ndarray
+    rgb: np.ndarray
+    variance: np.ndarray
+    alpha: np.ndarray
+
+
+def placement(scene) -> Region | None:
+    """Where the film of the scene's render goes in its image: the Render Region when the region is placed
+    in the full frame, None when the film is the whole image (no region, or cropped to it). Ask before
+    rendering: it describes the render as exported."""
+    return None if scene.render.use_crop_to_border else render_region(scene)
+
+
+def passes(film, region: Region | None = None) -> Passes:
+    """The film's passes, placed at `region` in a frame of zeros when one is given."""
+    rendered = Passes(film.xyz, film.rgb(), film.variance, np.ones((film.height, film.width)))
+    if region is None:
+        return rendered
+    top = region.full_height - region.y - region.height  # Region counts rows from the bottom
+
+    def placed(image):
+        frame = np.zeros((region.full_height, region.full_width) + image.shape[2:], dtype=image.dtype)
+        frame[top:top + region.height, region.x:region.x + region.width] = image
+        return frame
+
+    return Passes(*map(placed, rendered))
+
+
+def exr(path, images: Passes, layer: str) -> image_io.Output:
+    """The multilayer EXR of `images`, its channels in the render layer `layer`, as F12 names them."""
+    return image_io.exr(path, images.xyz, images.rgb, images.variance, images.alpha, layer)
+
+
+def store_image(name: str, rgb, alpha=None):
+    """Put linear Rec.709 pixels (height, width, 3; top row first) and `alpha` (default 1) into the float
+    Image `name`."""
     height, width = rgb.shape[:2]
     image = bpy.data.images.get(name)
     if image is None or not image.is_float or image.source != "GENERATED":
@@ -17,14 +60,16 @@ def store_image(name: str, rgb):
     elif tuple(image.size) != (width, height):
         image.scale(width, height)
     image.colorspace_settings.name = COLORSPACE
-    image.pixels.foreach_set(blender_rows(with_alpha(rgb)).ravel())
+    image.pixels.foreach_set(blender_rows(with_alpha(rgb, alpha)).ravel())
     image.update()
     return image
 
 
-def write_outputs(film, image_name: str, exr_path: str = ""):
-    """The EXR first (written to a temporary name and renamed, so a failure leaves the old file), then the
-    image; returns the image."""
+def write_outputs(film, image_name: str, exr_path: str = "", layer: str = image_io.VIEW_LAYER,
+                  region: Region | None = None):
+    """The EXR (see `exr`) first, written to a temporary name and renamed, so a failure leaves the old file;
+    then the image. `region`: see `placement`. Returns the image."""
+    images = passes(film, region)
     if exr_path:
-        image_io.write_exr(bpy.path.abspath(exr_path), film.xyz, film.rgb(), film.variance)
-    return store_image(image_name, film.rgb())
+        image_io.write_all([exr(bpy.path.abspath(exr_path), images, layer)])
+    return store_image(image_name, images.rgb, images.alpha)

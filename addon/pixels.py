@@ -10,6 +10,8 @@ def blender_rows(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(image[::-1].reshape(height * width, channels), dtype=np.float32)
 
 
-def with_alpha(rgb: np.ndarray) -> np.ndarray:
-    """RGB → RGBA with alpha 1 (a volume render covers the whole frame, its background included)."""
-    return np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=2)
+def with_alpha(rgb: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
+    """RGB → RGBA; `alpha` (height, width) defaults to 1 (a volume render covers the whole frame, its
+    background included)."""
+    alpha = np.ones(rgb.shape[:2]) if alpha is None else alpha
+    return np.concatenate([rgb, alpha[..., None]], axis=2)

@@ -10,6 +10,7 @@ import bpy
 from . import cli, curves, engine
 from .operators import emulation as emulation_operators
 from .operators import export as export_operators
+from .operators import import_scene as import_operators
 from .operators import presets as preset_operators
 from .operators import render_image
 from .operators import spectrum as spectrum_operators
@@ -17,7 +18,8 @@ from .props import attach, light, material, render, spectrum
 from .ui import lighting, material as material_ui, menus, render as render_ui, sidebar
 
 MODULES = (curves, spectrum, material, light, render, attach, engine, spectrum_operators, preset_operators,
-           export_operators, emulation_operators, render_image, menus, material_ui, lighting, render_ui, sidebar, cli)
+           export_operators, import_operators, emulation_operators, render_image, menus, material_ui, lighting,
+           render_ui, sidebar, cli)
 
 
 def register():

@@ -26,8 +26,9 @@ import bpy
 import numpy as np
 
 import addon
+from addon.importer import parts
 
-from . import blend_parts as parts
+from . import blend_parts as demo_parts
 from . import metamers, scenes
 
 HERE = Path(__file__).resolve().parent
@@ -60,7 +61,7 @@ DEMO_SCENES = {
 
 def _scene(demo: str):
     d = DEMO_SCENES[demo]
-    return parts.new_scene(d.scene, WIDTH, HEIGHT, d.spp, scenes.SEED, d.exposure)
+    return demo_parts.new_scene(d.scene, WIDTH, HEIGHT, d.spp, scenes.SEED, d.exposure)
 
 
 def _vdb(out: Path, name: str, named_grids: dict) -> str:
@@ -89,7 +90,7 @@ def build_rayleigh(out: Path) -> list:
         scene = _scene(demo)
         collection = scene.collection
         parts.add_camera(scene, tracer.camera, f"{label} camera")
-        parts.add_sun(collection, tracer.lights[0], lambda s: parts.set_preset(s, "E"), f"{label} sun")
+        parts.add_sun(collection, tracer.lights[0], lambda s: demo_parts.set_preset(s, "E"), f"{label} sun")
         scene.world = parts.new_world(f"{label} (no world light)")
         _volumes(collection, tracer.media[:1], path, {"air": f"{label} air"})
         if ground_object is None:
@@ -107,7 +108,7 @@ def build_frog(out: Path) -> list:
     collection = scene.collection
     parts.add_camera(scene, frog.camera)
     lamp, fill = frog.lights
-    uv = lambda settings: parts.set_flat(settings, scenes.UV_WINDOW)
+    uv = lambda settings: demo_parts.set_flat(settings, scenes.UV_WINDOW)
     parts.add_sun(collection, lamp, uv)
     scene.world = parts.new_world("UV fill", fill, uv)
     _volumes(collection, frog.media, _vdb(out, "frog.vdb", {m.name: m.density for m in frog.media}))
@@ -131,14 +132,15 @@ def build_metamerism(pair: metamers.MetamerPair) -> list:
             low = grid.index_to_world[:3, 3] - voxel / 2
             high = low + voxel * np.array(grid.values.shape)
             name = f"{label} {medium.name}"
-            parts.add_mesh_volume(collection, name, low, high, voxel, parts.volume_material(name, medium))
+            demo_parts.add_mesh_volume(collection, name, low, high, voxel, parts.volume_material(name, medium))
         cube_sets[label] = collection
         camera = camera or tracer.camera
     light_sets = {}
     for label, (illuminant, window) in LIGHT_PRESETS.items():
         collection = bpy.data.collections.new(f"Light {label}")
         sun, fill = scenes.two_cubes(1.0, 1.0, scenes.LIGHTS[label], WIDTH, HEIGHT, 1).lights
-        spectrum = lambda settings, illuminant=illuminant, window=window: parts.set_preset(settings, illuminant, window)
+        spectrum = lambda settings, illuminant=illuminant, window=window: demo_parts.set_preset(settings, illuminant,
+                                                                                                window)
         parts.add_sun(collection, sun, spectrum, f"Sun {label}")
         light_sets[label] = (collection, parts.new_world(f"Fill {label}", fill, spectrum))
     camera_object = None
@@ -166,11 +168,12 @@ def build_fire(out: Path) -> list:
     scene = _scene("fire")
     collection = scene.collection
     parts.add_camera(scene, fire.camera)
-    parts.add_sun(collection, fire.lights[0], lambda settings: parts.set_blackbody(settings, scenes.MOON_TEMPERATURE))
+    parts.add_sun(collection, fire.lights[0],
+                  lambda settings: demo_parts.set_blackbody(settings, scenes.MOON_TEMPERATURE))
     scene.world = parts.new_world("Night (no world light)")
     cache, cells = f"//{VOLUMES}/fire_cache", max(scenes.FIRE_CELLS)
     for medium, grid in ((flame, "flame"), (smoke, "density")):
-        parts.add_fluid_domain(collection, medium.name, *scenes.FIRE_BOX, cache, cells,
+        demo_parts.add_fluid_domain(collection, medium.name, *scenes.FIRE_BOX, cache, cells,
                                parts.volume_material(medium.name, medium), density_grid=grid)
     return [scene]
 

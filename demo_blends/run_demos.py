@@ -4,7 +4,8 @@ the figures that prove each one.
 Each demo is a scene of a .blend file in `demo_blends/` (`build_blends.DEMO_SCENES`; files that are
 missing are built first). It is opened in Blender-as-a-module, exported by the add-on (`addon.cli`)
 and rendered by the add-on's dispatcher. Written into the output folder:
-- `<name>.exr`: the raw film, multilayer (R G B A linear Rec.709, spectral.X/Y/Z, variance.X/Y/Z);
+- `<name>.exr`: the raw film, multilayer (passes Combined: linear Rec.709, XYZ and XYZ Variance, named as F12's:
+  `ViewLayer.XYZ.X`, ...);
 - `<name>.png`: the display image, denoised (`display`), Standard view at the scene's exposure;
 - `contact_sheet.png` (all demos, captioned) with `contact_sheet.txt` (the captions as text);
 - `figures.json`: every printed figure, for scripts and tests.

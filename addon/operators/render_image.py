@@ -11,7 +11,7 @@ import bpy
 
 from ..cycles_emulation.job import EmulationJob, emulation_job
 from ..export.scene import export_scene
-from ..image_output import write_outputs
+from ..image_output import placement, write_outputs
 from ..render_job import RenderJob
 from ..tracer.errors import SpectralError
 
@@ -27,18 +27,21 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     image_name: bpy.props.StringProperty(name="Image", default="Spectral Render",
                                          description="Float image to render into (created when missing)")
     exr_path: bpy.props.StringProperty(name="EXR File", subtype="FILE_PATH",
-                                       description="Also write a multilayer EXR (XYZ, RGB, variance); empty: none")
+                                       description="Also write a multilayer EXR with F12's passes (Combined, XYZ, "
+                                                   "XYZ Variance); empty: none")
 
     _job = None
     _timer = None
     _warnings = ()
     _warnings_shown = 0
     _message = None
+    _region = None  # where the film goes in the image (image_output.placement), as exported
 
     def _start(self, context) -> RenderJob | EmulationJob | None:
         settings = context.scene.spectral
         try:
             export = export_scene(context.evaluated_depsgraph_get())
+            self._region = placement(context.scene)
             job = (emulation_job(context.scene, export) if settings.renderer == "CYCLES"
                    else RenderJob(export.scene, settings.scheduler_address))
         except SpectralError as problem:
@@ -62,7 +65,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             context.workspace.status_text_set(message)
             self._message = message
 
-    def _finish(self, job: RenderJob) -> set:
+    def _finish(self, context, job: RenderJob) -> set:
         self._report_warnings()
         if job.error is not None:
             self.report({"ERROR"}, f"Render failed, nothing written: {job.error}")
@@ -71,7 +74,8 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             self.report({"WARNING"}, "Render cancelled, nothing written")
             return {"CANCELLED"}
         try:
-            image = write_outputs(job.result.film, self.image_name, self.exr_path)
+            image = write_outputs(job.result.film, self.image_name, self.exr_path, context.view_layer.name,
+                                  self._region)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Render not saved: {problem}")
             return {"CANCELLED"}
@@ -83,7 +87,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         if job is None:
             return {"CANCELLED"}
         job.run()
-        return self._finish(job)
+        return self._finish(context, job)
 
     def invoke(self, context, event):
         job = self._start(context)
@@ -110,7 +114,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         context.window_manager.event_timer_remove(self._timer)
         context.window_manager.progress_end()
         self._show_message(context, None)
-        return self._finish(self._job)
+        return self._finish(context, self._job)
 
 
 CLASSES = (SPECTRAL_OT_render_image,)

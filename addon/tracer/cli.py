@@ -57,7 +57,8 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     render = commands.add_parser("render", help="render a scene file to images")
     render.add_argument("scene", type=Path, help="scene.json (see docs/scene-format.md)")
-    render.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (XYZ, RGB, variance)")
+    render.add_argument("--out", type=Path, required=True, help="multilayer EXR to write (passes Combined, XYZ, "
+                        "XYZ Variance, named as Blender's F12 names them)")
     render.add_argument("--png", type=Path, help="also write a PNG preview (Standard view)")
     render.add_argument("--npy", type=Path, help="also write XYZ as a float32 .npy array (height, width, 3)")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")

@@ -1,5 +1,10 @@
 """Writes rendered images: multilayer EXR (XYZ, RGB and variance), PNG previews, .npy arrays and text.
 
+The multilayer EXR's channels are named as Blender names a render's passes (`LAYER.PASS.CHANNEL`):
+`ViewLayer.Combined.R/G/B/A` (linear Rec.709), `ViewLayer.XYZ.X/Y/Z` and `ViewLayer.XYZ Variance.X/Y/Z`.
+`PASSES` is the one list of them: the render engine registers these passes, so F12's EXR, Render to
+Image's and the command lines' are named alike and Blender opens every one as the same render layer.
+
 All files of one command are written together (`write_all`): each to a temporary name beside its
 destination, and only when every one was written are they renamed into place. A failed or cancelled
 write never leaves a half-written file or clobbers an existing one, and never replaces some files but
@@ -14,6 +19,16 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from .errors import SpectralError
+
+
+VIEW_LAYER = "ViewLayer"  # Blender's default view layer name: the layer of an EXR written outside Blender
+COMBINED, XYZ, VARIANCE = "Combined", "XYZ", "XYZ Variance"
+PASSES = {COMBINED: "RGBA", XYZ: "XYZ", VARIANCE: "XYZ"}  # each pass's channels, in order
+
+
+def channel_names(pass_name: str, layer: str = VIEW_LAYER) -> list[str]:
+    """The EXR channel names of one pass, e.g. `ViewLayer.XYZ.X`, `ViewLayer.XYZ.Y`, `ViewLayer.XYZ.Z`."""
+    return [f"{layer}.{pass_name}.{letter}" for letter in PASSES[pass_name]]
 
 
 class Output(NamedTuple):
@@ -120,21 +135,24 @@ def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pix
         raise SpectralError(f"OpenImageIO cannot write it: {oiio.geterror() or 'it gave no reason'}")
 
 
-def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None) -> Output:
-    """Multilayer EXR: R, G, B (linear Rec.709), A, spectral.X/Y/Z and, if given, variance.X/Y/Z."""
-    alpha = np.ones(xyz.shape[:2] + (1,))
-    layers = [rgb, alpha, xyz]
-    names = ["R", "G", "B", "A", "spectral.X", "spectral.Y", "spectral.Z"]
+def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None, alpha: np.ndarray | None = None,
+        layer: str = VIEW_LAYER) -> Output:
+    """Multilayer EXR of the render layer `layer`: the Combined pass (RGB linear Rec.709, `alpha`, default 1),
+    XYZ and, if given, XYZ Variance (see the module docstring)."""
+    alpha = np.ones(xyz.shape[:2]) if alpha is None else alpha
+    layers = [rgb, alpha[..., None], xyz]
+    names = channel_names(COMBINED, layer) + channel_names(XYZ, layer)
     if variance is not None:
         layers.append(variance)
-        names += ["variance.X", "variance.Y", "variance.Z"]
+        names += channel_names(VARIANCE, layer)
     pixels = np.concatenate(layers, axis=2).astype(np.float32)
     return Output(check_destination(path, ".exr"), lambda name: _write_oiio(name, pixels, names, "float"))
 
 
-def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None) -> Path:
+def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None,
+              alpha: np.ndarray | None = None, layer: str = VIEW_LAYER) -> Path:
     """Write `exr(...)` on its own."""
-    return write_all([exr(path, xyz, rgb, variance)])[0]
+    return write_all([exr(path, xyz, rgb, variance, alpha, layer)])[0]
 
 
 def srgb_display(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:

@@ -1,6 +1,7 @@
 """The .blend command line (`python -m addon.cli render`): files that are not blend files and frames
 Blender does not have are bad input (exit 1, a message, nothing written), not tracebacks or clamped frames;
-and what the add-on exports obeys the scene's rules before it is rendered."""
+frame lists, `#` output paths, resolution and percentage as Blender's `-b -f/-a`; and what the add-on
+exports obeys the scene's rules before it is rendered."""
 
 import subprocess
 import sys
@@ -8,6 +9,9 @@ from pathlib import Path
 
 import bpy
 import pytest
+
+from addon.frame_options import check_frame_paths, frame_path, parse_frames
+from addon.tracer.errors import SpectralError
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -65,7 +69,6 @@ def test_an_albedo_csv_above_one_is_refused_by_the_scene_rules(registered, tmp_p
     before it is rendered or saved."""
     from addon.export.scene import export_scene
     from addon.tracer.compile import compile_scene
-    from addon.tracer.errors import SpectralError
     from tests.addon.builders import basic_scene
 
     _scene, cloud = basic_scene(tmp_path)
@@ -76,3 +79,75 @@ def test_an_albedo_csv_above_one_is_refused_by_the_scene_rules(registered, tmp_p
     exported = export_scene(bpy.context.evaluated_depsgraph_get()).scene
     with pytest.raises(SpectralError, match=r"media\[0\]\.albedo: albedo must be within \[0, 1\], found 1.5 at 550 nm"):
         compile_scene(exported)
+
+
+def test_frame_lists_read_as_blenders():
+    limits = (-1048574, 1048574)
+    assert parse_frames("1-3, 7,2,5-6", limits) == [1, 2, 3, 7, 5, 6]  # in the order given, each once
+    assert parse_frames("-2--1", limits) == [-2, -1]
+    assert len(parse_frames("1-250", limits)) == 250
+
+
+def test_hashes_become_the_zero_padded_frame_number():
+    assert frame_path(Path("out/frame_####.exr"), 7) == Path("out/frame_0007.exr")
+    assert frame_path(Path("out/#/frame_##.exr"), 123) == Path("out/#/frame_123.exr")  # the last run only
+    assert frame_path(Path("out/still.exr"), 7) == Path("out/still.exr")
+    check_frame_paths({"--out": Path("still.exr")}, [7])  # one frame needs no '#'
+    with pytest.raises(SpectralError, match=r"--png: 2 frames need a '#' in the file name .*e\.g\. a_####\.png"):
+        check_frame_paths({"--out": Path("f_#.exr"), "--png": Path("a.png")}, [1, 2])
+
+
+@pytest.mark.parametrize(("options", "words"), [
+    (["--frames", "5-3"], "--frames: the range 5-3 runs backwards; write 3-5"),
+    (["--frames", "1,x"], "--frames: 'x' is neither a frame nor a range FIRST-LAST (e.g. 1-250 or 1,3,5-7)"),
+    (["--frames", "1-99999999999"], "--frames: Blender's frames run from -1048574 to 1048574, found 99999999999"),
+    (["--frames", "1-3"], "--out: 3 frames need a '#' in the file name where the frame number goes"),
+    (["--resolution", "1920"], "--resolution: write it as WIDTHxHEIGHT in pixels (e.g. 1920x1080), found '1920'"),
+    (["--resolution", "2x1080"], "--resolution: each side must be from 4 to 65536 pixels, as in Blender, found 2x1080"),
+    (["--percentage", "0"], "--percentage: must be from 1 to 32767, as in Blender, found 0"),
+])
+def test_bad_frames_and_sizes_are_refused_before_rendering(blend, tmp_path, options, words):
+    done = run_cli(blend, "--out", tmp_path / "out.exr", *options, "--quiet")
+    assert done.returncode == 1, done.stderr
+    assert f"error: {words}" in done.stderr and "Traceback" not in done.stderr
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["empty.blend"]
+
+
+def test_frame_and_frames_together_are_a_usage_error(blend, tmp_path):
+    done = run_cli(blend, "--out", tmp_path / "out_#.exr", "--frame", 1, "--frames", "1-2")
+    assert done.returncode == 2 and "not allowed with argument" in done.stderr
+
+
+@pytest.mark.slow
+def test_frames_render_at_the_size_asked_for_each_to_its_own_files(registered, tmp_path):
+    from addon.tracer import image_io
+    from tests.addon.builders import basic_scene
+
+    scene, _cloud = basic_scene(tmp_path)
+    scene.frame_current = 1
+    blend = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    done = run_cli(blend, "--frames", "2,4-5", "--resolution", "40x20", "--percentage", 25, "--spp", 1,
+                   "--out", tmp_path / "out" / "frame_###.exr", "--png", tmp_path / "out" / "preview_#.png", "--quiet")
+    assert done.returncode == 0, done.stderr
+    assert sorted(path.name for path in (tmp_path / "out").iterdir()) == [
+        "frame_002.exr", "frame_004.exr", "frame_005.exr", "preview_2.png", "preview_4.png", "preview_5.png"]
+    assert done.stdout.count("wrote ") == 3 and "(10×5, frame 4," in done.stdout
+    assert image_io.read_exr(tmp_path / "out" / "frame_005.exr")["ViewLayer.XYZ.Y"].shape == (5, 10)
+
+
+@pytest.mark.slow
+def test_a_later_frame_that_fails_is_named_and_the_earlier_frames_kept(registered, tmp_path):
+    from tests.addon.builders import basic_scene
+
+    scene, _cloud = basic_scene(tmp_path)
+    scene.spectral.lambda_max = 830.0
+    for frame, shortest in ((1, 360.0), (2, 830.0)):  # at frame 2 the wavelength range is empty
+        scene.spectral.lambda_min = shortest
+        scene.spectral.keyframe_insert("lambda_min", frame=frame)
+    blend = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    done = run_cli(blend, "--frames", "1-3", "--spp", 1, "--out", tmp_path / "out" / "f_#.exr", "--quiet")
+    assert done.returncode == 1, done.stderr
+    assert "error: frame 2: render settings: the wavelength range 830–830 nm is empty" in done.stderr
+    assert "wrote" in done.stdout and sorted(path.name for path in (tmp_path / "out").iterdir()) == ["f_1.exr"]

@@ -328,11 +328,12 @@ def test_render_to_image_uses_the_emulation_when_chosen(registered, tmp_path, ca
     assert image.is_float and tuple(image.size) == (16, 12)
     pixels = np.array(image.pixels[:], dtype=np.float32).reshape(12, 16, 4)[::-1]
     channels = image_io.read_exr(exr)
-    assert {"R", "G", "B", "A", "spectral.X", "spectral.Y", "spectral.Z", "variance.Y"} <= set(channels)
-    xyz = np.stack([channels[f"spectral.{c}"] for c in "XYZ"], axis=-1)
+    assert {"ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B", "ViewLayer.Combined.A",
+            "ViewLayer.XYZ.X", "ViewLayer.XYZ.Y", "ViewLayer.XYZ.Z", "ViewLayer.XYZ Variance.Y"} <= set(channels)
+    xyz = np.stack([channels[f"ViewLayer.XYZ.{c}"] for c in "XYZ"], axis=-1)
     assert xyz[..., 1].max() > 0.05
     np.testing.assert_allclose(pixels[..., :3], colorimetry.xyz_to_rgb(xyz), rtol=1e-4, atol=1e-5)
-    np.testing.assert_allclose(channels["R"], pixels[..., 0], rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(channels["ViewLayer.Combined.R"], pixels[..., 0], rtol=1e-5, atol=1e-6)
     assert scene.render.engine != "CYCLES"  # the user's engine came back
 
 
@@ -464,5 +465,5 @@ def test_cli_follows_the_scene_renderer(registered, tmp_path):
     assert done.returncode == 0, done.stderr
     assert "Cycles emulation: 3 equal bands in 1 Cycles render(s), each made twice" in done.stdout
     channels = image_io.read_exr(out)
-    assert channels["spectral.Y"].shape == (12, 16) and channels["spectral.Y"].max() > 0.01
-    assert "variance.Y" in channels
+    assert channels["ViewLayer.XYZ.Y"].shape == (12, 16) and channels["ViewLayer.XYZ.Y"].max() > 0.01
+    assert "ViewLayer.XYZ Variance.Y" in channels

@@ -67,6 +67,35 @@ def test_f12_renders_the_render_region(registered, tmp_path, crop):
     assert y.max() > 0
 
 
+@pytest.mark.parametrize("crop", [False, True])
+def test_render_to_image_and_the_cli_place_the_render_region_as_f12(registered, tmp_path, crop):
+    """Crop off: the full frame with the region in place, empty (alpha 0) outside; crop on: the region
+    alone. Before, Render to Image and the CLI wrote the region alone either way."""
+    scene, _cloud = basic_scene(tmp_path)
+    render = scene.render
+    render.engine = "SPECTRAL_VOLUME"
+    render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    render.filepath = str(tmp_path / "f12.exr")
+    render.use_border, render.use_crop_to_border = True, crop
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.33, 0.77, 0.1, 0.55
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    assert bpy.ops.spectral.render_image(image_name="Spectral", exr_path=str(tmp_path / "image.exr")) == {"FINISHED"}
+    blend = tmp_path / "region.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    done = _run_cli("render", blend, "--out", tmp_path / "cli.exr", "--quiet")
+    assert done.returncode == 0, done.stderr
+    f12 = image_io.read_exr(tmp_path / "f12.exr")
+    alpha = f12["ViewLayer.Combined.A"]
+    assert alpha.shape == ((5, 7) if crop else (12, 16)) and alpha.min() == (1.0 if crop else 0.0)
+    for written in ("image.exr", "cli.exr"):
+        channels = image_io.read_exr(tmp_path / written)
+        for name in ("ViewLayer.Combined.A", "ViewLayer.Combined.R", "ViewLayer.XYZ.Y", "ViewLayer.XYZ Variance.Z"):
+            np.testing.assert_allclose(channels[name], f12[name], rtol=1e-4, atol=1e-6, err_msg=f"{written} {name}")
+    image = bpy.data.images["Spectral"]
+    pixels = np.array(image.pixels[:], dtype=np.float32).reshape(*alpha.shape, 4)[::-1]
+    np.testing.assert_array_equal(pixels[..., 3], alpha)
+
+
 def test_f12_with_bad_input_reports_and_keeps_the_old_file(registered, tmp_path):
     scene, cloud = basic_scene(tmp_path)
     cloud.data.filepath = str(tmp_path / "gone.vdb")
@@ -89,7 +118,33 @@ def test_render_to_image_fills_a_float_image_and_an_exr(registered, tmp_path):
     film = _reference(scene)
     np.testing.assert_allclose(pixels[..., :3], film.rgb(), rtol=1e-4, atol=1e-6)
     channels = image_io.read_exr(exr)
-    np.testing.assert_allclose(channels["spectral.Y"], film.xyz[..., 1], rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(channels["ViewLayer.XYZ.Y"], film.xyz[..., 1], rtol=1e-4, atol=1e-6)
+
+
+def _passes_blender_sees(path) -> list[str]:
+    """The passes Blender finds in an EXR file: the outputs its compositor's Image node offers."""
+    tree = bpy.data.node_groups.new("Passes", "CompositorNodeTree")
+    node = tree.nodes.new("CompositorNodeImage")
+    node.image = bpy.data.images.load(str(path))
+    return [socket.name for socket in node.outputs if socket.enabled]
+
+
+def test_render_to_image_names_its_exr_channels_as_f12(registered, tmp_path):
+    """One naming: the same channels, in the view layer's name, and Blender opens both as the same passes
+    (before, Render to Image's `spectral.X` and `variance.X` opened as passes "spectral" and "variance")."""
+    scene, _cloud = basic_scene(tmp_path)
+    scene.view_layers[0].name = "Front"
+    scene.render.engine = "SPECTRAL_VOLUME"
+    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    scene.render.filepath = str(tmp_path / "f12.exr")
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    assert bpy.ops.spectral.render_image(image_name="Spectral", exr_path=str(tmp_path / "image.exr")) == {"FINISHED"}
+    f12, image = image_io.read_exr(tmp_path / "f12.exr"), image_io.read_exr(tmp_path / "image.exr")
+    assert sorted(image) == sorted(f12)
+    assert "Front.XYZ Variance.Z" in image and "Front.Combined.A" in image
+    np.testing.assert_allclose(image["Front.XYZ.Y"], f12["Front.XYZ.Y"], rtol=1e-4, atol=1e-6)
+    assert _passes_blender_sees(tmp_path / "image.exr") == _passes_blender_sees(tmp_path / "f12.exr") == [
+        "Combined", "Alpha", "XYZ", "XYZ Variance"]
 
 
 def test_failed_render_to_image_touches_nothing(registered, tmp_path):
@@ -186,7 +241,7 @@ def test_cli_renders_a_blend_to_exr(registered, tmp_path):
     assert done.returncode == 0, done.stderr
     assert "wrote" in done.stdout
     channels = image_io.read_exr(out)
-    assert channels["spectral.Y"].shape == (12, 16) and channels["spectral.Y"].max() > 0
+    assert channels["ViewLayer.XYZ.Y"].shape == (12, 16) and channels["ViewLayer.XYZ.Y"].max() > 0
 
 
 def test_cli_reports_bad_input_and_keeps_the_output(registered, tmp_path):
@@ -215,7 +270,7 @@ def test_cli_renders_the_scene_it_is_asked_for(registered, tmp_path):
     out = tmp_path / "wide.exr"
     done = _run_cli("render", blend, "--scene", "Wide", "--out", out, "--spp", 1, "--quiet")
     assert done.returncode == 0, done.stderr
-    assert image_io.read_exr(out)["spectral.Y"].shape == (10, 20)
+    assert image_io.read_exr(out)["ViewLayer.XYZ.Y"].shape == (10, 20)
     with pytest.raises(SpectralError, match=r"has no scene 'Tall'; its scenes: 'Scene', 'Wide'"):
         cli.open_scene(blend, "Tall")
 

@@ -27,10 +27,11 @@ def test_render_writes_every_requested_output(write_scene, tmp_path):
                    "--npy", tmp_path / "image.npy", "--stats", tmp_path / "stats.json", "--threads", 1)
     assert done.returncode == 0, done.stderr
     channels = image_io.read_exr(out)
-    assert {"R", "G", "B", "A", "spectral.X", "spectral.Y", "spectral.Z", "variance.Y"} <= set(channels)
-    assert channels["spectral.Y"].shape == (6, 8)
+    assert {"ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B", "ViewLayer.Combined.A",
+            "ViewLayer.XYZ.X", "ViewLayer.XYZ.Y", "ViewLayer.XYZ.Z", "ViewLayer.XYZ Variance.Y"} <= set(channels)
+    assert channels["ViewLayer.XYZ.Y"].shape == (6, 8)
     xyz = np.load(tmp_path / "image.npy")
-    np.testing.assert_allclose(xyz[..., 1], channels["spectral.Y"], rtol=1e-6)
+    np.testing.assert_allclose(xyz[..., 1], channels["ViewLayer.XYZ.Y"], rtol=1e-6)
     stats = json.loads((tmp_path / "stats.json").read_text())
     assert stats["samples_per_pixel"] == 3 and stats["pixel_samples_per_second"] > 0
     np.testing.assert_allclose(stats["mean_xyz"][1], xyz[..., 1].mean(), rtol=1e-5)

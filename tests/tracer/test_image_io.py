@@ -16,7 +16,7 @@ def test_outputs_are_written_together(tmp_path):
                                   image_io.png(tmp_path / "image.png", XYZ), image_io.npy(tmp_path / "xyz.npy", XYZ),
                                   image_io.text(tmp_path / "stats.json", "{}")])
     assert [path.name for path in written] == ["image.exr", "image.png", "xyz.npy", "stats.json"]
-    np.testing.assert_allclose(image_io.read_exr(written[0])["spectral.Y"], XYZ[..., 1], rtol=1e-6)
+    np.testing.assert_allclose(image_io.read_exr(written[0])["ViewLayer.XYZ.Y"], XYZ[..., 1], rtol=1e-6)
     assert np.array_equal(np.load(written[2]), XYZ.astype(np.float32))
     assert sorted(path.name for path in tmp_path.iterdir()) == ["a", "image.png", "stats.json", "xyz.npy"]
 
