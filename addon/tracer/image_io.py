@@ -102,8 +102,10 @@ def write_all(outputs: list[Output]) -> list[Path]:
                 raise SpectralError(f"cannot write {path}: {problem.strerror or problem}") from None
             except SpectralError as problem:
                 raise SpectralError(f"cannot write {path}: {problem}") from None
+        mode = _new_file_mode()
         for temporary, output in zip(staged, outputs):
             try:
+                os.chmod(temporary, mode)  # mkstemp makes files private (0600): give the mode a new file gets
                 os.replace(temporary, output.path)
             except OSError as problem:  # rare after a successful write in the same folder
                 raise SpectralError(f"cannot write {output.path}: {problem.strerror or problem}") from None
@@ -117,6 +119,13 @@ def write_all(outputs: list[Output]) -> list[Path]:
                 if folder.is_dir() and not any(folder.iterdir()):
                     folder.rmdir()
     return [Path(output.path) for output in outputs]
+
+
+def _new_file_mode() -> int:
+    """The mode a file created here gets (0666 less the process's umask), as Blender's own writes get."""
+    umask = os.umask(0o022)
+    os.umask(umask)
+    return 0o666 & ~umask
 
 
 def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pixel_type: str) -> None:

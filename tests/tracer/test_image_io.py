@@ -1,6 +1,8 @@
 """Writing images: every output of one command is written, or none is, and failures name the file."""
 
 import errno
+import os
+import stat
 
 import numpy as np
 import pytest
@@ -56,3 +58,11 @@ def test_destinations_are_checked_without_leaving_anything(tmp_path):
         with pytest.raises(SpectralError, match=words):
             image_io.check_destination(path, ".exr")
     assert sorted(path.name for path in tmp_path.iterdir()) == ["dir.exr", "file"]
+
+
+def test_written_files_get_the_mode_of_a_new_file(tmp_path):
+    """Not mkstemp's private 0600: 0666 less the umask, as Blender writes its own images."""
+    umask = os.umask(0o022)
+    os.umask(umask)
+    written = image_io.write_all([image_io.npy(tmp_path / "xyz.npy", np.zeros((2, 2, 3)))])
+    assert stat.S_IMODE(written[0].stat().st_mode) == 0o666 & ~umask
