@@ -45,6 +45,7 @@ CALIBRATION_ALBEDOS = (0.0, 0.5, 0.75, 0.88, 0.94, 0.97, 1.0)
 MAX_ALBEDO = 0.97  # designs stay at or below this albedo (near 1, paths get long and ρ very steep)
 DESIGN_CEILING = 0.75  # highest apparent reflectance designed: ρ(MAX_ALBEDO) is 0.76 in the two-cube scene
 CALIBRATION_SPP = 128
+BOUND_SNAP = 1e-6  # designed knots this close to a bound are put on it
 KNOTS = np.arange(380.0, 721.0, 20.0)
 BASE_RGB = (0.22, 0.3, 0.18)  # ρ₁: a muted olive green under D65
 SMOOTHNESS = 2.0
@@ -181,7 +182,10 @@ def design_pair(highest: float, base_rgb=BASE_RGB) -> tuple[np.ndarray, np.ndarr
         feasible = np.abs(same_under_d65["fun"](result.x)).max() < 1e-3
         if feasible and (best is None or result.fun < best.fun):
             best = result
-    return first, _on_grid(best.x)
+    # Knots SLSQP left on a bound sit there to within ~1e-8, by amounts that differ between CPUs; on the
+    # bound exactly, the .blend's curve (whose handles flatten at extrema and ties) is the same everywhere.
+    knots = np.where(best.x < BOUND_SNAP, 0.0, np.where(best.x > highest - BOUND_SNAP, highest, best.x))
+    return first, _on_grid(knots)
 
 
 # ----------------------------------------------------------------------------- 3. the pair
