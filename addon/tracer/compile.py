@@ -12,6 +12,7 @@ import numpy as np
 from . import colorimetry, sampling
 from .errors import SpectralError
 from .majorant import block_size_for, majorant_grid
+from .planck import planck_radiance
 from .scene import CAMERA_KINDS as CAMERAS, LIGHT_KINDS as LIGHTS, PHASES, WAVELENGTHS_PER_PATH
 from .scene import Grid, Light, Medium, Scene
 from .spectra import Spectrum
@@ -69,7 +70,7 @@ class KernelScene(NamedTuple):
     light_cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
     light_smooth: np.ndarray  # (NL,) spot edge width in cosine
     light_pmf: np.ndarray  # (NL,) selection probability for next-event estimation
-    light_power: np.ndarray  # (NL,) power proxy (luminance × geometry) used for pmf and λ sampling
+    light_power: np.ndarray  # (NL,) power proxy (luminance × geometry) that `light_pmf` normalises
     # wavelengths and colour
     lambda_cdf: np.ndarray  # (GRID,) binned cdf of the hero wavelength in this band
     lambda_pdf: np.ndarray  # (GRID - 1,)
@@ -232,26 +233,48 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
     return out
 
 
-def wavelength_distribution(mode: str, light_spd: np.ndarray, light_power: np.ndarray, xyz_weights: np.ndarray,
-                            lo: float, hi: float):
+# The `light` mode's share of the `colour` density: it keeps the pdf positive wherever any light (emission,
+# fluorescence, a sky's horizon, or a light outside the sources' spectra) can reach the camera.
+LIGHT_MODE_DEFENSIVE_SHARE = 0.2
+
+
+def light_mode_sources(kernel_scene: KernelScene) -> list[tuple[Spectrum, float]]:
+    """The spectra the `light` mode follows, as (spectrum, weight): each light's spectrum weighted by its
+    next-event selection probability (a sky's zenith and horizon spectra half each), then, with the lights
+    together weighing 1, each emitting medium's black body at its hottest temperature and each fluorophore's
+    emission spectrum weighing 1 each."""
+    ks = kernel_scene
+    sources = []
+    for kind, spd, horizon, pmf in zip(ks.light_kind, ks.light_spd, ks.light_spd_horizon, ks.light_pmf):
+        if kind == LIGHT_KINDS["sky"]:
+            sources += [(Spectrum(spd), 0.5 * pmf), (Spectrum(horizon), 0.5 * pmf)]
+        else:
+            sources.append((Spectrum(spd), pmf))
+    for m, offset in enumerate(ks.temperature_offset):
+        if offset >= 0:
+            size = int(np.prod(ks.temperature_shape[m]))
+            scale, shift, _ = ks.temperature_map[m]
+            hottest = scale * float(ks.temperature_data[offset:offset + size].max(initial=0.0)) + shift
+            if hottest > 0:
+                sources.append((Spectrum(planck_radiance(GRID, hottest)), 1.0))
+    sources += [(Spectrum(pdf), 1.0) for pdf in ks.emission_pdf if pdf.any()]
+    return sources
+
+
+def wavelength_distribution(mode: str, kernel_scene: KernelScene, lo: float, hi: float):
     """The hero-wavelength distribution over [lo, hi] for a `wavelength_sampling` mode."""
     if mode in ("uniform", "uv"):
         return sampling.uniform(lo, hi)
     if mode == "colour":
-        return sampling.colour_distribution(xyz_weights, lo, hi)
+        return sampling.colour_distribution(kernel_scene.xyz_weights, lo, hi)
     if mode == "visible":
         return sampling.visible_distribution(lo, hi)
     if mode == "d65_rejection":
-        from .spectra import illuminant
-
-        return sampling.from_spectrum(illuminant("D65"), lo, hi)
-    if mode == "light" and light_spd.shape[0]:
-        # Each light's radiometric SPD has luminance = strength; weight it by its geometric factor.
-        pairs = [(Spectrum(spd), power / max(float(colorimetry.spectrum_to_xyz(spd)[1]), 1e-30))
-                 for spd, power in zip(light_spd, light_power)]
-        return sampling.composite_light_distribution(pairs, lo, hi)
-    if mode == "light":  # emissive media only: no light spectra to follow
-        return sampling.visible_distribution(lo, hi)
+        return sampling.d65(lo, hi)
+    if mode == "light":
+        return sampling.defensive_composite(light_mode_sources(kernel_scene),
+                                            sampling.colour_distribution(kernel_scene.xyz_weights, lo, hi),
+                                            LIGHT_MODE_DEFENSIVE_SHARE)
     raise SpectralError(f"unknown wavelength sampling {mode!r}")
 
 
@@ -299,7 +322,6 @@ def compile_scene(scene: Scene) -> KernelScene:
 
 def with_band(kernel_scene: KernelScene, mode: str, lo: float, hi: float) -> KernelScene:
     """The same kernel data with the hero wavelength drawn from [lo, hi] by `mode`."""
-    distribution = wavelength_distribution(mode, kernel_scene.light_spd, kernel_scene.light_power,
-                                           kernel_scene.xyz_weights, lo, hi)
+    distribution = wavelength_distribution(mode, kernel_scene, lo, hi)
     return kernel_scene._replace(lambda_cdf=np.asarray(distribution.cdf, dtype=np.float64),
                                  lambda_pdf=np.asarray(distribution.bin_pdf, dtype=np.float64))
