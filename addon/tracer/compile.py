@@ -279,12 +279,13 @@ def wavelength_distribution(mode: str, kernel_scene: KernelScene, lo: float, hi:
 
 
 def camera_extent(camera) -> np.ndarray:
-    """Film extent (x, y) and shift (x, y) in camera space: at z = -1 (perspective) or absolute (ortho)."""
+    """Film extent (x, y) and shift (x, y) in camera space: at z = -1 (perspective) or absolute (ortho).
+    The frame's aspect is width · pixel_aspect : height, and AUTO fits its larger side (as Blender)."""
+    aspect = camera.width * camera.pixel_aspect / camera.height
     fit = camera.sensor_fit
     if fit == "AUTO":
-        fit = "HORIZONTAL" if camera.width >= camera.height else "VERTICAL"
+        fit = "HORIZONTAL" if aspect >= 1.0 else "VERTICAL"
     span = 2.0 * np.tan(0.5 * camera.fov) if camera.kind == "perspective" else camera.ortho_scale
-    aspect = camera.width / camera.height
     extent_x, extent_y = (span, span / aspect) if fit == "HORIZONTAL" else (span * aspect, span)
     return np.array([extent_x, extent_y, camera.shift_x * span, camera.shift_y * span])
 

@@ -114,7 +114,9 @@ class Light:
 class Camera:
     """Blender's camera model: looks down its local -Z with +Y up; `to_world` is its world matrix.
     `fov` (radians, perspective) or `ortho_scale` (orthographic) spans the `sensor_fit` axis
-    ("AUTO": the larger image axis, "HORIZONTAL", "VERTICAL"); shifts are in units of that span."""
+    ("AUTO": the larger axis of the frame, "HORIZONTAL", "VERTICAL"); shifts are in units of that span.
+    `pixel_aspect` is a pixel's width ÷ its height (Blender's pixel_aspect_x / pixel_aspect_y): the frame
+    is width · pixel_aspect wide for height tall."""
 
     to_world: np.ndarray
     width: int
@@ -125,6 +127,7 @@ class Camera:
     sensor_fit: str = "AUTO"
     shift_x: float = 0.0
     shift_y: float = 0.0
+    pixel_aspect: float = 1.0
 
 
 def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
@@ -190,6 +193,7 @@ def _check_camera(camera: Camera, where: str) -> None:
     checks.one_of(camera.sensor_fit, f"{where}.sensor_fit", SENSOR_FITS)
     checks.number(camera.shift_x, f"{where}.shift_x")
     checks.number(camera.shift_y, f"{where}.shift_y")
+    checks.positive(checks.number(camera.pixel_aspect, f"{where}.pixel_aspect"), f"{where}.pixel_aspect")
     affine_matrix(camera.to_world, f"{where}.to_world")
 
 

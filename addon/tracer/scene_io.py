@@ -27,7 +27,7 @@ SCENE_FILE = "scene.json"
 _TOP = {"required": ("format", "version", "camera"), "optional": ("media", "lights", "render")}
 _CAMERA = {
     "required": ("to_world", "width", "height"),
-    "optional": ("kind", "fov", "ortho_scale", "sensor_fit", "shift_x", "shift_y"),
+    "optional": ("kind", "fov", "ortho_scale", "sensor_fit", "shift_x", "shift_y", "pixel_aspect"),
 }
 _MEDIUM = {
     "required": ("density", "extinction", "albedo"),
@@ -124,6 +124,7 @@ def _camera(value, where: str) -> Camera:
         sensor_fit=data.get("sensor_fit", Camera.sensor_fit),
         shift_x=checks.number(data.get("shift_x", 0.0), f"{where}.shift_x"),
         shift_y=checks.number(data.get("shift_y", 0.0), f"{where}.shift_y"),
+        pixel_aspect=checks.number(data.get("pixel_aspect", Camera.pixel_aspect), f"{where}.pixel_aspect"),
     )
 
 
@@ -314,6 +315,7 @@ def _camera_json(camera: Camera) -> dict:
         "sensor_fit": camera.sensor_fit,
         "shift_x": float(camera.shift_x),
         "shift_y": float(camera.shift_y),
+        "pixel_aspect": float(camera.pixel_aspect),
     }
 
 
