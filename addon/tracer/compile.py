@@ -1,7 +1,7 @@
 """Lowers a `Scene` to the flat arrays the kernels consume (`KernelScene`), for one wavelength band.
 
 Everything the integrator needs is precomputed here once per band: spectra tabulated on the grid,
-light spectra scaled to their luminance, majorant grids, the hero-wavelength distribution and the
+light spectra scaled to their strength, majorant grids, the hero-wavelength distribution and the
 XYZ weights. Both backends read the same `KernelScene`, so they cannot disagree about the scene.
 """
 
@@ -70,7 +70,7 @@ class KernelScene(NamedTuple):
     light_cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
     light_smooth: np.ndarray  # (NL,) spot edge width in cosine
     light_pmf: np.ndarray  # (NL,) selection probability for next-event estimation
-    light_power: np.ndarray  # (NL,) power proxy (luminance × geometry) that `light_pmf` normalises
+    light_power: np.ndarray  # (NL,) power proxy (`_proxy_luminance` × geometry) that `light_pmf` normalises
     # wavelengths and colour
     lambda_cdf: np.ndarray  # (GRID,) binned cdf of the hero wavelength in this band
     lambda_pdf: np.ndarray  # (GRID - 1,)
@@ -163,20 +163,18 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
     return out
 
 
-def luminance_scale(light: Light, spectrum: Spectrum | None = None) -> float:
-    """Factor turning a light's spectrum shape (default: `light.spectrum`) into radiometric units with
-    luminance Y = `strength` (DESIGN.md: spectra are shapes, strength sets luminance).
-
-    A spectrum with no visible part (Y = 0, e.g. pure UV) is scaled instead so that its radiant
-    integral equals that of an equal-energy spectrum of luminance `strength`."""
+def strength_scale(light: Light, spectrum: Spectrum | None = None, cmf: str = "cie1931") -> float:
+    """Factor turning a light's spectrum shape (default: `light.spectrum`; a sky's horizon too) into
+    radiometric units with `strength` in the light's unit: luminous, luminance Y = strength with the
+    colour matching functions `cmf`; radiant, ∫ spectrum dλ over the grid = strength (watts)."""
     spectrum = spectrum or light.spectrum
-    luminance = float(colorimetry.spectrum_to_xyz(spectrum.values)[1])
-    if luminance > 1e-12:
-        return light.strength / luminance
-    radiant = spectrum.integral()
-    if radiant <= 0:
-        raise SpectralError(f"light {light.name or light.kind!r} has a spectrum that is zero everywhere")
-    return light.strength * (LAMBDA_MAX - LAMBDA_MIN) / radiant  # the constant-1 spectrum has Y = 1
+    if light.unit == "radiant":
+        total = spectrum.integral()
+    else:
+        total = float(colorimetry.spectrum_to_xyz(spectrum.values, cmf)[1])
+    if not total > 0:  # Scene.validate refuses these with the light's path
+        raise SpectralError(f"light {light.name or light.kind!r}: its spectrum has no {light.unit} part to scale")
+    return light.strength / total
 
 
 def _scene_centre_and_radius(media) -> tuple[np.ndarray, float]:
@@ -193,12 +191,20 @@ def _scene_centre_and_radius(media) -> tuple[np.ndarray, float]:
     return centre, float(np.linalg.norm(corners - centre, axis=1).max())
 
 
-def _light_arrays(lights: tuple[Light, ...], media) -> dict:
+def _proxy_luminance(spd: np.ndarray, cmf: str) -> float:
+    """The light-choice proxy of a radiometric spectrum: its luminance Y, or, where more, that of an
+    equal-energy spectrum of the same radiant integral (so a light with no visible part, a UV lamp
+    that makes fluorescence, is still chosen)."""
+    equal_energy = np.trapezoid(spd, GRID) / (LAMBDA_MAX - LAMBDA_MIN)  # the constant-1 spectrum has Y = 1
+    return max(float(colorimetry.spectrum_to_xyz(spd, cmf)[1]), float(equal_energy))
+
+
+def _light_arrays(lights: tuple[Light, ...], media, cmf: str) -> dict:
     centre, radius = _scene_centre_and_radius(media)
     count = len(lights)
     out = {
         "light_kind": np.array([LIGHT_KINDS[light.kind] for light in lights], dtype=np.int64),
-        "light_spd": np.array([light.spectrum.values * luminance_scale(light) for light in lights]).reshape(
+        "light_spd": np.array([light.spectrum.values * strength_scale(light, cmf=cmf) for light in lights]).reshape(
             count, GRID.size),
         "light_spd_horizon": np.zeros((count, GRID.size)),
         "light_dir": np.zeros((count, 3)),
@@ -208,7 +214,7 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
     }
     power = np.zeros(count)
     for index, light in enumerate(lights):
-        luminance = light.strength
+        luminance = _proxy_luminance(out["light_spd"][index], cmf)
         if light.kind == "sun":
             out["light_dir"][index] = light.direction / np.linalg.norm(light.direction)
             out["light_cos"][index] = np.cos(0.5 * light.angle)
@@ -217,7 +223,7 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
             power[index] = np.pi * luminance
             if light.kind == "sky":
                 horizon = light.horizon_spectrum or light.spectrum
-                out["light_spd_horizon"][index] = horizon.values * luminance_scale(light, horizon)
+                out["light_spd_horizon"][index] = horizon.values * strength_scale(light, horizon, cmf)
         else:
             out["light_pos"][index] = light.position
             distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
@@ -301,7 +307,7 @@ def compile_scene(scene: Scene) -> KernelScene:
     `with_band` restricts it to one band."""
     settings = scene.validate().settings
     media = _media_arrays(scene.media)
-    lights = _light_arrays(scene.lights, scene.media)
+    lights = _light_arrays(scene.lights, scene.media, settings.cmf)
     camera = scene.camera
     kernel_scene = KernelScene(
         cam_to_world=np.asarray(camera.to_world, dtype=np.float64),

@@ -16,7 +16,7 @@ from .checks import shown
 from .errors import SpectralError
 from .film import check_film_memory, film_bytes
 from .grids import affine_matrix, load_grid, save_grid_npy
-from .scene import LIGHT_KINDS, BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
+from .scene import LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
 from .spectra import Spectrum
 from .wavelengths import GRID
 
@@ -38,7 +38,7 @@ _ALBEDO_TABLE = {"required": ("densities", "spectra"), "optional": ()}
 _FLUORESCENCE = {"required": ("excitation", "emission", "quantum_yield"), "optional": ()}
 _EMISSION = {"required": ("temperature",), "optional": ("intensity", "temperature_scale", "temperature_offset")}
 _LIGHT_COMMON = ("kind", "spectrum")
-_LIGHT_OPTIONAL = ("strength", "name")
+_LIGHT_OPTIONAL = ("strength", "unit", "name")
 _LIGHT_FIELDS = {
     "sun": {"required": ("direction",), "optional": ("angle",)},
     "environment": {"required": (), "optional": ()},
@@ -230,7 +230,7 @@ def _light(value, where: str, folder: Path) -> Light:
         fields["spot_blend"] = checks.number(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend")
     return Light(kind=kind, spectrum=_spectrum(data["spectrum"], f"{where}.spectrum", folder),
                  strength=checks.number(data.get("strength", 1.0), f"{where}.strength"), name=data.get("name", ""),
-                 **fields)
+                 unit=data.get("unit", Light.unit), **fields)
 
 
 def _render(value, where: str) -> RenderSettings:
@@ -367,6 +367,7 @@ def _spectrum_json(spectrum: Spectrum):
 def _light_json(light: Light) -> dict:
     data = {"kind": light.kind, "name": light.name, "spectrum": _spectrum_json(light.spectrum)}
     data["strength"] = float(light.strength)
+    data["unit"] = light.unit
     if light.kind == "sun":
         data["direction"] = _floats(light.direction)
         data["angle"] = float(np.degrees(light.angle))
@@ -451,7 +452,8 @@ def _world_bounds(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _describe_light(light: Light) -> str:
-    text = f"light {light.name or '(unnamed)'!r}: {light.kind}, strength {light.strength:g}"
+    unit = RADIANT_UNITS[light.kind] if light.unit == "radiant" else "(luminance Y)"
+    text = f"light {light.name or '(unnamed)'!r}: {light.kind}, strength {light.strength:g} {unit}"
     if light.kind == "sun":
         text += f", towards ({', '.join(f'{c:.3g}' for c in light.direction)}), {np.degrees(light.angle):.3g}° wide"
     if light.kind in ("point", "spot"):

@@ -340,6 +340,20 @@ def test_lights_and_world(registered, tmp_path):
     assert lights["Spot"].spot_size == pytest.approx(math.radians(30))
     assert lights["Spot"].spot_blend == pytest.approx(0.3)
     assert lights["Sky"].kind == "sky" and lights["Sky"].strength == 0.5 and lights["Sky"].horizon_spectrum is not None
+    assert {light.unit for light in lights.values()} == {"luminous"}  # the default
+
+
+def test_light_and_world_units_are_exported(registered, tmp_path):
+    """A UV lamp's Power in watts: Radiant makes the tracer's intensity P / (4π) W/sr over its spectrum."""
+    basic_scene(tmp_path)
+    lamp = link(bpy.data.objects.new("UV lamp", bpy.data.lights.new("UV lamp", "POINT")))
+    lamp.data.energy, lamp.data.spectral.unit = 20.0, "radiant"
+    bpy.context.scene.world = bpy.data.worlds.new("UV world")
+    bpy.context.scene.world.spectral.unit = "radiant"
+    lights = {light.name: light for light in _export().scene.lights}
+    assert lights["UV lamp"].unit == "radiant" and lights["UV world"].unit == "radiant"
+    assert lights["Sun"].unit == "luminous"
+    assert lights["UV lamp"].strength == pytest.approx(20.0 / (4 * math.pi))
 
 
 def test_missing_vdb_file_is_named(registered, tmp_path):

@@ -39,16 +39,21 @@ def _fluorophore(box):
                     fluorescence=Fluorescence(excitation, spectra.gaussian(550, 20), 1.0))
 
 
+def _lamp(spectrum):
+    """A UV environment of 10 W·m⁻²·sr⁻¹."""
+    return Light(kind="environment", spectrum=spectrum, strength=10.0, unit="radiant")
+
+
 def _uv_lamp_with_a_visible_tail():
     """A UV lamp with a weak violet tail on a fluorophore emitting green: the green is in no light's spectrum."""
     lamp = spectra.window(spectra.constant(1.0), 300, 360) + spectra.window(spectra.constant(0.01), 360, 400)
-    return [_fluorophore(s.box_grid(size=(4.0, 4.0, 1.0)))], [s.environment(spectrum=lamp)]
+    return [_fluorophore(s.box_grid(size=(4.0, 4.0, 1.0)))], [_lamp(lamp)]
 
 
 def _uv_lamp_zero_from_359_nm():
     """A UV lamp with nothing in the camera's 360–830 nm range: only the fluorescence is visible."""
     lamp = spectra.window(spectra.constant(1.0), 300, 359)
-    return [_fluorophore(s.box_grid(size=(4.0, 4.0, 1.0)))], [s.environment(spectrum=lamp)]
+    return [_fluorophore(s.box_grid(size=(4.0, 4.0, 1.0)))], [_lamp(lamp)]
 
 
 SCENES = {
