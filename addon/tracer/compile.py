@@ -239,6 +239,9 @@ def _light_arrays(lights: tuple[Light, ...], media, cmf: str) -> dict:
     return out
 
 
+# Above this temperature a black body's shape over the grid is λ⁻⁴ (Rayleigh–Jeans) to 3e-4, so the
+# `light` mode follows this one's (hotter ones may overflow in double precision).
+BLACKBODY_SHAPE_MAX_KELVIN = 1e8
 # The `light` mode's share of the `colour` density: it keeps the pdf positive wherever any light (emission,
 # fluorescence, a sky's horizon, or a light outside the sources' spectra) can reach the camera.
 LIGHT_MODE_DEFENSIVE_SHARE = 0.2
@@ -262,7 +265,7 @@ def light_mode_sources(kernel_scene: KernelScene) -> list[tuple[Spectrum, float]
             scale, shift, _ = ks.temperature_map[m]
             hottest = scale * float(ks.temperature_data[offset:offset + size].max(initial=0.0)) + shift
             if hottest > 0:
-                sources.append((Spectrum(planck_radiance(GRID, hottest)), 1.0))
+                sources.append((Spectrum(planck_radiance(GRID, min(hottest, BLACKBODY_SHAPE_MAX_KELVIN))), 1.0))
     sources += [(Spectrum(pdf), 1.0) for pdf in ks.emission_pdf if pdf.any()]
     return sources
 
