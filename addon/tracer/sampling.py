@@ -176,8 +176,8 @@ def defensive_composite(pairs, defensive: BinnedDistribution, share: float) -> B
     """`share` of the `defensive` density plus 1 − share of the mixture Σ_k w_k p_k / Σ_k w_k of the
     spectra in `pairs` of (Spectrum, weight) over the same range, where p_k is spectrum k normalised to unit
     area there (only its shape counts) and w_k its weight; all of the defensive density where the spectra
-    are zero over the range. With a defensive density that is
-    positive wherever light can reach the camera, so is the mixture: it is unbiased for any scene."""
+    are zero over the range. With a defensive density that is positive wherever light can reach the
+    camera, so is the mixture: it is unbiased for any scene."""
     if not 0.0 < share <= 1.0:
         raise SpectralError(f"a defensive share must lie in (0, 1], got {share}")
     composite = _composite_weights(pairs, slice(defensive.lo - int(LAMBDA_MIN), defensive.hi - int(LAMBDA_MIN)))
@@ -263,9 +263,9 @@ def rejection_pdf(spectrum: Spectrum, lam, lo, hi) -> np.ndarray:
 
 def d65_sampling_shape() -> Spectrum:
     """D65 (`spectra.illuminant("D65")`, tabulated over 300–780 nm) continued outside its table at its end
-    values, so the D65 samplers have a positive density over the whole grid (D65 is 63 % of its 560 nm
-    value at 780 nm and stays near that to 830 nm in the CIE's extended table; a sampling density only needs
-    to be positive wherever light reaches the camera, its exact shape changes the noise, not the mean)."""
+    values (63 % of its 560 nm value at 780 nm), so the D65 samplers have a positive density over the whole
+    grid: a sampling density must be positive wherever light reaches the camera (else that light is lost);
+    its shape there changes the noise, not the mean."""
     table = illuminant("D65")
     inside = np.flatnonzero(table.values > 0)
     return Spectrum(np.interp(GRID, GRID[inside], table.values[inside]))
@@ -273,7 +273,7 @@ def d65_sampling_shape() -> Spectrum:
 
 def d65_rejection(n, rng: np.random.Generator, lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> np.ndarray:
     """The report's sampleWavelengthD65: `n` wavelengths ∝ D65 on [lo, hi) by rejection sampling
-    (`d65_sampling_shape`: constant beyond the table's 300–780 nm)."""
+    (`d65_sampling_shape`: continued at its end values outside the table's 300–780 nm)."""
     return rejection_sample(d65_sampling_shape(), n, rng, lo, hi, name="D65")
 
 
