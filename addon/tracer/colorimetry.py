@@ -107,8 +107,9 @@ def xyz_weights(cmf_name: str = "cie1931") -> np.ndarray:
 
 
 @lru_cache(maxsize=None)
-def _integration_weights(cmf_name: str) -> np.ndarray:
-    """c with XYZ = c @ S: the exact integral of the piecewise-linear product of `xyz_weights` and S."""
+def integration_weights(cmf_name: str) -> np.ndarray:
+    """Read-only (3, GRID.size) c with XYZ = c @ S for S on GRID: the exact integral of the piecewise-linear
+    product of `xyz_weights` and S (node i's share of the integral)."""
     w = xyz_weights(cmf_name)
     c = 4.0 * w
     c[:, 1:] += w[:, :-1]
@@ -125,7 +126,7 @@ def spectrum_to_xyz(values_on_grid, cmf_name: str = "cie1931") -> np.ndarray:
     if values.shape[-1:] != GRID.shape:
         raise SpectralError(f"spectrum_to_xyz needs {GRID.size} values per spectrum (the 1 nm grid), "
                             f"got shape {values.shape}")
-    return values @ _integration_weights(cmf_name).T
+    return values @ integration_weights(cmf_name).T
 
 
 def _colourspace(space: str):
