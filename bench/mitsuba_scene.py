@@ -30,7 +30,7 @@ import re
 
 import numpy as np
 
-from addon.tracer.compile import camera_extent, luminance_scale
+from addon.tracer.compile import camera_extent, strength_scale
 from addon.tracer.scene import Grid, Medium, Scene
 from addon.tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
 
@@ -92,7 +92,7 @@ def medium_dicts(mi, medium: Medium, name: str) -> dict:
 
 
 def light_dict(light) -> dict:
-    spd = light.spectrum.values * luminance_scale(light)
+    spd = light.spectrum.values * strength_scale(light)
     if light.kind == "sun":
         if light.angle > 0:
             raise ValueError("a sun with an angular diameter has no Mitsuba `directional` equivalent")

@@ -12,7 +12,7 @@ Colour vocabulary: chromaticity (x, y); CIE LCh hue angle h (degrees, CIELAB aga
 import numpy as np
 
 from addon.tracer import colorimetry
-from addon.tracer.compile import camera_extent, luminance_scale
+from addon.tracer.compile import camera_extent, strength_scale
 from addon.tracer.scene import Camera, Grid, Light
 from addon.tracer.wavelengths import LAMBDA_STEP
 
@@ -121,7 +121,7 @@ def region_xyz(xyz: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 def light_xyz(light: Light) -> np.ndarray:
     """XYZ of a light's spectrum in the tracer's radiometric units (its strength sets Y)."""
-    return colorimetry.spectrum_to_xyz(light.spectrum.values * luminance_scale(light))
+    return colorimetry.spectrum_to_xyz(light.spectrum.values * strength_scale(light))
 
 
 def hue_angle(xyz, white_xyz) -> float:
@@ -232,7 +232,7 @@ def absorbed_power(medium, light: Light, supersample: int = 4) -> float:
     points = np.stack(np.meshgrid(ix, iy, indexing="ij")).reshape(2, -1)
     column = map_coordinates(columns, points, order=1, mode="nearest")
     area = step[0] * step[1] / n**2
-    irradiance = light.spectrum.values * luminance_scale(light)
+    irradiance = light.spectrum.values * strength_scale(light)
     excitation = medium.density_scale * medium.fluorescence.excitation.values
     active = np.flatnonzero(irradiance * excitation > 0)
     absorbed = np.array([area * np.sum(-np.expm1(-excitation[i] * column)) for i in active])

@@ -125,9 +125,9 @@ def optical_thickness(medium, inside: np.ndarray) -> float:
 def _probes(scene: Scene, inside: np.ndarray) -> list[_Probe]:
     shapes = []
     for light in scene.lights:
-        shapes.append(parameters.unit_luminance(light))
+        shapes.append(parameters.unit_strength(light))
         if light.horizon_spectrum is not None:
-            shapes.append(parameters.unit_luminance(light, light.horizon_spectrum))
+            shapes.append(parameters.unit_strength(light, light.horizon_spectrum))
     probes = [_Probe(shape, None, "light") for shape in shapes]
     for medium in scene.media:
         thickness = optical_thickness(medium, inside)

@@ -2,8 +2,8 @@
 bands are packed into Cycles renders.
 
 Band k covers the grid nodes lo_k ≤ λ < hi_k (the last band includes its upper edge), so the bands
-partition the rendered range and their XYZ weights w_k = Σ_band cmf · Δλ / Σ ȳ · Δλ (the tracer's
-quadrature, `colorimetry.xyz_weights`) add up to the XYZ of a constant spectrum of 1: Y = 1 over the
+partition the rendered range and their XYZ weights w_k = Σ_band c (the tracer's quadrature, node by node:
+`colorimetry.integration_weights`) add up to the XYZ of a constant spectrum of 1: Y = 1 over the
 visible range. Shaped by a reference spectrum (the scene's lights), the weights make that spectrum's XYZ
 exact however wide the bands: the light's colour is not distorted by the band approximation. A spectrum
 enters a band as its mean weighted by x̄ + ȳ + z̄ (what the eye sees of the band), or its plain mean where
@@ -21,7 +21,7 @@ import numpy as np
 from ..tracer import colorimetry
 from ..tracer.errors import SpectralError
 from ..tracer.sampling import band_ranges
-from ..tracer.wavelengths import GRID, LAMBDA_STEP
+from ..tracer.wavelengths import GRID
 
 CHANNELS = 3  # R, G, B of one Cycles render
 
@@ -56,15 +56,15 @@ def split(lo: float, hi: float, count: int) -> Bands:
 
 def xyz_weights(bands: Bands, cmf: str = "cie1931", reference=None) -> np.ndarray:
     """(K, 3): XYZ = Σ_k value_k · weights[k] for a spectrum with band means value_k shaped within each band
-    like `reference` (default flat): weights[k] = Σ_band cmf · reference · Δλ / band mean of reference.
+    like `reference` (default flat): weights[k] = Σ_band c · reference / band mean of reference.
     Exact for the reference itself (and any multiple of it per band), so for a light of that spectrum."""
     masks = bands.masks.astype(np.float64)
     if reference is None:
-        return masks @ colorimetry.xyz_weights(cmf).T * LAMBDA_STEP
+        return masks @ colorimetry.integration_weights(cmf).T
     reference = np.asarray(reference, dtype=np.float64)
     means = band_means(reference, bands, cmf)
     flat = xyz_weights(bands, cmf)
-    shaped = masks @ (colorimetry.xyz_weights(cmf) * reference).T * LAMBDA_STEP
+    shaped = masks @ (colorimetry.integration_weights(cmf) * reference).T
     usable = means > 1e-12 * max(float(means.max()), 1e-300)
     return np.where(usable[:, None], shaped / np.where(usable, means, 1.0)[:, None], flat)
 

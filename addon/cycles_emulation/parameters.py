@@ -6,7 +6,7 @@ the same material definition. In band k a medium has extinction ext_k, albedo_k(
 scattering coefficient over that of the extinction, per density level, so σ_s is preserved), anisotropy
 g_k, the fluorophore's excitation (absorption only: Cycles cannot re-emit at another wavelength) and
 its blackbody emission as a table over temperature. A
-light's colour in band k is the band mean of its spectrum scaled to luminance 1 (`compile.luminance_scale`),
+light's colour in band k is the band mean of its spectrum scaled to strength 1 in its unit (`compile.strength_scale`),
 its Cycles strength stays Blender's, so XYZ = Σ_k render_k · w_k (`bands.xyz_weights`, shaped within each
 band by the lights' spectra) matches the tracer.
 """
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..tracer import colorimetry, spectra
-from ..tracer.compile import default_band, luminance_scale
+from ..tracer.compile import default_band, strength_scale
 from ..tracer.errors import SpectralError
 from ..tracer.scene import Light, Medium, Scene
 from ..tracer.wavelengths import GRID
@@ -99,16 +99,17 @@ def thermal_bands(emission, bands: bandlib.Bands, cmf: str = "cie1931") -> Therm
                         offset=emission.temperature_offset)
 
 
-def unit_luminance(light: Light, spectrum=None) -> np.ndarray:
-    """A light's spectrum (or its `spectrum`, e.g. a sky's horizon) on GRID, scaled to luminance 1."""
+def unit_strength(light: Light, spectrum=None, cmf: str = "cie1931") -> np.ndarray:
+    """A light's spectrum (or its `spectrum`, e.g. a sky's horizon) on GRID, scaled to strength 1 in the
+    light's unit (luminance Y with `cmf`, or watts)."""
     spectrum = spectrum or light.spectrum
-    return spectrum.values * luminance_scale(dataclasses.replace(light, strength=1.0), spectrum)
+    return spectrum.values * strength_scale(dataclasses.replace(light, strength=1.0), spectrum, cmf)
 
 
 def light_bands(light: Light, bands: bandlib.Bands, cmf: str = "cie1931", spectrum=None) -> np.ndarray:
     """(K,) colour of a light (or of its `spectrum`, e.g. a sky's horizon) for a Cycles strength of
-    Blender's own: the spectrum scaled to luminance 1."""
-    return bandlib.band_means(unit_luminance(light, spectrum), bands, cmf)
+    Blender's own: the spectrum scaled to strength 1 in its unit."""
+    return bandlib.band_means(unit_strength(light, spectrum, cmf), bands, cmf)
 
 
 def reflectance_bands(rgb, bands: bandlib.Bands, cmf: str = "cie1931", method: str = "jakob2019") -> np.ndarray:
@@ -141,9 +142,9 @@ def reference_spectrum(lights, media=()) -> np.ndarray | None:
             luminance = colorimetry.spectrum_to_xyz(glow)[1]
             total += glow / luminance if luminance > 0 else 0.0
     for light in lights:
-        total += light.strength * unit_luminance(light)
+        total += light.strength * unit_strength(light)
         if light.horizon_spectrum is not None:
-            total += light.strength * unit_luminance(light, light.horizon_spectrum)
+            total += light.strength * unit_strength(light, light.horizon_spectrum)
     return total if total.any() else None
 
 

@@ -1,8 +1,8 @@
 """Blender camera and render resolution → tracer Camera, for the whole frame or its Render Region.
 
 Our Camera follows Blender's conventions, so most fields copy over: it looks down its local −Z with +Y
-up, `fov` / `ortho_scale` span the sensor-fit axis (AUTO: the larger image axis), and shifts are in
-units of that span. The camera object's scale is dropped (Blender ignores it too).
+up, `fov` / `ortho_scale` span the sensor-fit axis (AUTO: the larger axis of the frame, whose aspect is
+resolution × pixel aspect), and shifts are in units of that span. The camera object's scale is dropped (Blender ignores it too).
 
 With Render Region on, the camera sees only the region: its frustum is the part of the frame's frustum
 behind the region's pixels (a narrower span and a shift), so its image is those pixels of the full frame.
@@ -97,6 +97,7 @@ def export_camera(scene, camera_object=None) -> Camera:
         sensor_fit=data.sensor_fit,
         shift_x=data.shift_x,
         shift_y=data.shift_y,
+        pixel_aspect=scene.render.pixel_aspect_x / scene.render.pixel_aspect_y,
     )
     region = render_region(scene)
     return camera if region is None else region_camera(camera, region)

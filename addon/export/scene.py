@@ -56,9 +56,6 @@ def unsupported_settings(scene) -> list[str]:
     render, warnings = scene.render, []
     if render.use_motion_blur:
         warnings.append("motion blur is not supported: rendered without it (Render Properties ▸ Motion Blur)")
-    if render.pixel_aspect_x != render.pixel_aspect_y:
-        warnings.append(f"pixel aspect {render.pixel_aspect_x:g}:{render.pixel_aspect_y:g} is not supported: "
-                        "rendered with square pixels (Output Properties ▸ Format ▸ Aspect)")
     return warnings
 
 

@@ -5,11 +5,13 @@ normalisation (a radiance spectrum of constant value 1 has Y = 1), the matrices 
 (Blender's scene-linear), Rec.2020 and ACEScg, and a few colour-difference helpers for demos and tests.
 Tables and matrices come from colour-science, imported on first use (`colour_science`).
 
-Quadrature: every XYZ in the tracer is the node sum over GRID,
-    XYZ = Σ_i w_i · S(λ_i) · Δλ,   w = cmf / (Σ_i ȳ(λ_i) · Δλ),   Δλ = LAMBDA_STEP = 1 nm,
-the same rule as colour-science's "Integration" method. It equals the trapezoid rule on GRID up to half
-the end values at 250 and 830 nm, where the CMFs are below 2·10⁻⁶ of their peak. Kernels that sample λ
-with pdf p estimate the same integral with w(λ)·S(λ)/p(λ), interpolating `xyz_weights` linearly.
+Convention: spectra and the weights w = cmf / ∫ȳ dλ are linear between grid points (wavelengths.py),
+and every XYZ in the tracer is the exact integral of their product,
+    XYZ = ∫ w(λ) S(λ) dλ = Σ_i c_i S(λ_i),   c_i = Δλ · (w_{i−1} + 4 w_i + w_{i+1}) / 6
+(halved terms at the grid's ends), so a spectrum S ≡ 1 has Y = 1. The kernels, which draw λ with pdf p
+and interpolate `xyz_weights` and the spectra linearly, converge to this same integral. It differs from
+the 1 nm node sum Σ_i w_i S(λ_i) Δλ (colour-science's "Integration") by w's curvature: under 0.01 % for
+broad spectra, up to 1.5 % in X for a narrow band where x̄ is near its minimum (500–510 nm).
 """
 
 import warnings
@@ -98,19 +100,33 @@ def cmf(name: str = "cie1931") -> np.ndarray:
 
 @lru_cache(maxsize=None)
 def xyz_weights(cmf_name: str = "cie1931") -> np.ndarray:
-    """Per-nanometre XYZ weights, a read-only (3, GRID.size) array: cmf / (Σ ȳ·Δλ), so that
-    XYZ = Σ weights·S·Δλ and a spectrum S ≡ 1 has Y = 1."""
+    """Per-nanometre XYZ weights w on GRID, a read-only (3, GRID.size) array: cmf / ∫ȳ dλ (ȳ linear
+    between grid points), so that a spectrum S ≡ 1 has Y = ∫ w_y dλ = 1. The kernels interpolate them."""
     table = cmf(cmf_name)
-    return _read_only(table / (table[1].sum() * LAMBDA_STEP))
+    return _read_only(table / np.trapezoid(table[1], dx=LAMBDA_STEP))
+
+
+@lru_cache(maxsize=None)
+def integration_weights(cmf_name: str) -> np.ndarray:
+    """Read-only (3, GRID.size) c with XYZ = c @ S for S on GRID: the exact integral of the piecewise-linear
+    product of `xyz_weights` and S (node i's share of the integral)."""
+    w = xyz_weights(cmf_name)
+    c = 4.0 * w
+    c[:, 1:] += w[:, :-1]
+    c[:, :-1] += w[:, 1:]
+    c[:, 0] -= 2.0 * w[:, 0]  # the end nodes have one neighbouring interval: (2 w_0 + w_1) / 6
+    c[:, -1] -= 2.0 * w[:, -1]
+    return _read_only(c * LAMBDA_STEP / 6.0)
 
 
 def spectrum_to_xyz(values_on_grid, cmf_name: str = "cie1931") -> np.ndarray:
-    """XYZ of spectra tabulated on GRID: input (..., GRID.size), output (..., 3)."""
+    """XYZ of spectra tabulated on GRID: input (..., GRID.size), output (..., 3); the integral of the
+    spectra and weights linear between grid points (see the module docstring)."""
     values = np.asarray(values_on_grid, dtype=np.float64)
     if values.shape[-1:] != GRID.shape:
         raise SpectralError(f"spectrum_to_xyz needs {GRID.size} values per spectrum (the 1 nm grid), "
                             f"got shape {values.shape}")
-    return values @ xyz_weights(cmf_name).T * LAMBDA_STEP
+    return values @ integration_weights(cmf_name).T
 
 
 def _colourspace(space: str):

@@ -1,7 +1,7 @@
 """Lowers a `Scene` to the flat arrays the kernels consume (`KernelScene`), for one wavelength band.
 
 Everything the integrator needs is precomputed here once per band: spectra tabulated on the grid,
-light spectra scaled to their luminance, majorant grids, the hero-wavelength distribution and the
+light spectra scaled to their strength, majorant grids, the hero-wavelength distribution and the
 XYZ weights. Both backends read the same `KernelScene`, so they cannot disagree about the scene.
 """
 
@@ -12,6 +12,7 @@ import numpy as np
 from . import colorimetry, sampling
 from .errors import SpectralError
 from .majorant import block_size_for, majorant_grid
+from .planck import planck_radiance
 from .scene import CAMERA_KINDS as CAMERAS, LIGHT_KINDS as LIGHTS, PHASES, WAVELENGTHS_PER_PATH
 from .scene import Grid, Light, Medium, Scene
 from .spectra import Spectrum
@@ -69,7 +70,7 @@ class KernelScene(NamedTuple):
     light_cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
     light_smooth: np.ndarray  # (NL,) spot edge width in cosine
     light_pmf: np.ndarray  # (NL,) selection probability for next-event estimation
-    light_power: np.ndarray  # (NL,) power proxy (luminance × geometry) used for pmf and λ sampling
+    light_power: np.ndarray  # (NL,) power proxy (`_proxy_luminance` × geometry) that `light_pmf` normalises
     # wavelengths and colour
     lambda_cdf: np.ndarray  # (GRID,) binned cdf of the hero wavelength in this band
     lambda_pdf: np.ndarray  # (GRID - 1,)
@@ -162,20 +163,18 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
     return out
 
 
-def luminance_scale(light: Light, spectrum: Spectrum | None = None) -> float:
-    """Factor turning a light's spectrum shape (default: `light.spectrum`) into radiometric units with
-    luminance Y = `strength` (DESIGN.md: spectra are shapes, strength sets luminance).
-
-    A spectrum with no visible part (Y = 0, e.g. pure UV) is scaled instead so that its radiant
-    integral equals that of an equal-energy spectrum of luminance `strength`."""
+def strength_scale(light: Light, spectrum: Spectrum | None = None, cmf: str = "cie1931") -> float:
+    """Factor turning a light's spectrum shape (default: `light.spectrum`; a sky's horizon too) into
+    radiometric units with `strength` in the light's unit: luminous, luminance Y = strength with the
+    colour matching functions `cmf`; radiant, ∫ spectrum dλ over the grid = strength (watts)."""
     spectrum = spectrum or light.spectrum
-    luminance = float(colorimetry.spectrum_to_xyz(spectrum.values)[1])
-    if luminance > 1e-12:
-        return light.strength / luminance
-    radiant = spectrum.integral()
-    if radiant <= 0:
-        raise SpectralError(f"light {light.name or light.kind!r} has a spectrum that is zero everywhere")
-    return light.strength * (LAMBDA_MAX - LAMBDA_MIN) / radiant  # the constant-1 spectrum has Y = 1
+    if light.unit == "radiant":
+        total = spectrum.integral()
+    else:
+        total = float(colorimetry.spectrum_to_xyz(spectrum.values, cmf)[1])
+    if not total > 0:  # Scene.validate refuses these with the light's path
+        raise SpectralError(f"light {light.name or light.kind!r}: its spectrum has no {light.unit} part to scale")
+    return light.strength / total
 
 
 def _scene_centre_and_radius(media) -> tuple[np.ndarray, float]:
@@ -192,12 +191,20 @@ def _scene_centre_and_radius(media) -> tuple[np.ndarray, float]:
     return centre, float(np.linalg.norm(corners - centre, axis=1).max())
 
 
-def _light_arrays(lights: tuple[Light, ...], media) -> dict:
+def _proxy_luminance(spd: np.ndarray, cmf: str) -> float:
+    """The light-choice proxy of a radiometric spectrum: its luminance Y, or, where more, that of an
+    equal-energy spectrum of the same radiant integral (so a light with no visible part, a UV lamp
+    that makes fluorescence, is still chosen)."""
+    equal_energy = np.trapezoid(spd, GRID) / (LAMBDA_MAX - LAMBDA_MIN)  # the constant-1 spectrum has Y = 1
+    return max(float(colorimetry.spectrum_to_xyz(spd, cmf)[1]), float(equal_energy))
+
+
+def _light_arrays(lights: tuple[Light, ...], media, cmf: str) -> dict:
     centre, radius = _scene_centre_and_radius(media)
     count = len(lights)
     out = {
         "light_kind": np.array([LIGHT_KINDS[light.kind] for light in lights], dtype=np.int64),
-        "light_spd": np.array([light.spectrum.values * luminance_scale(light) for light in lights]).reshape(
+        "light_spd": np.array([light.spectrum.values * strength_scale(light, cmf=cmf) for light in lights]).reshape(
             count, GRID.size),
         "light_spd_horizon": np.zeros((count, GRID.size)),
         "light_dir": np.zeros((count, 3)),
@@ -207,7 +214,7 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
     }
     power = np.zeros(count)
     for index, light in enumerate(lights):
-        luminance = light.strength
+        luminance = _proxy_luminance(out["light_spd"][index], cmf)
         if light.kind == "sun":
             out["light_dir"][index] = light.direction / np.linalg.norm(light.direction)
             out["light_cos"][index] = np.cos(0.5 * light.angle)
@@ -216,7 +223,7 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
             power[index] = np.pi * luminance
             if light.kind == "sky":
                 horizon = light.horizon_spectrum or light.spectrum
-                out["light_spd_horizon"][index] = horizon.values * luminance_scale(light, horizon)
+                out["light_spd_horizon"][index] = horizon.values * strength_scale(light, horizon, cmf)
         else:
             out["light_pos"][index] = light.position
             distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
@@ -232,36 +239,62 @@ def _light_arrays(lights: tuple[Light, ...], media) -> dict:
     return out
 
 
-def wavelength_distribution(mode: str, light_spd: np.ndarray, light_power: np.ndarray, xyz_weights: np.ndarray,
-                            lo: float, hi: float):
+# Above this temperature a black body's shape over the grid is λ⁻⁴ (Rayleigh–Jeans) to 3e-4, so the
+# `light` mode follows this one's (hotter ones may overflow in double precision).
+BLACKBODY_SHAPE_MAX_KELVIN = 1e8
+# The `light` mode's share of the `colour` density: it keeps the pdf positive wherever any light (emission,
+# fluorescence, a sky's horizon, or a light outside the sources' spectra) can reach the camera.
+LIGHT_MODE_DEFENSIVE_SHARE = 0.2
+
+
+def light_mode_sources(kernel_scene: KernelScene) -> list[tuple[Spectrum, float]]:
+    """The spectra the `light` mode follows, as (spectrum, weight): each light's spectrum weighted by its
+    next-event selection probability (a sky's zenith and horizon spectra half each), then, with the lights
+    together weighing 1, each emitting medium's black body at its hottest temperature and each fluorophore's
+    emission spectrum weighing 1 each."""
+    ks = kernel_scene
+    sources = []
+    for kind, spd, horizon, pmf in zip(ks.light_kind, ks.light_spd, ks.light_spd_horizon, ks.light_pmf):
+        if kind == LIGHT_KINDS["sky"]:
+            sources += [(Spectrum(spd), 0.5 * pmf), (Spectrum(horizon), 0.5 * pmf)]
+        else:
+            sources.append((Spectrum(spd), pmf))
+    for m, offset in enumerate(ks.temperature_offset):
+        if offset >= 0:
+            size = int(np.prod(ks.temperature_shape[m]))
+            scale, shift, _ = ks.temperature_map[m]
+            hottest = scale * float(ks.temperature_data[offset:offset + size].max(initial=0.0)) + shift
+            if hottest > 0:
+                sources.append((Spectrum(planck_radiance(GRID, min(hottest, BLACKBODY_SHAPE_MAX_KELVIN))), 1.0))
+    sources += [(Spectrum(pdf), 1.0) for pdf in ks.emission_pdf if pdf.any()]
+    return sources
+
+
+def wavelength_distribution(mode: str, kernel_scene: KernelScene, lo: float, hi: float):
     """The hero-wavelength distribution over [lo, hi] for a `wavelength_sampling` mode."""
     if mode in ("uniform", "uv"):
         return sampling.uniform(lo, hi)
     if mode == "colour":
-        return sampling.colour_distribution(xyz_weights, lo, hi)
+        return sampling.colour_distribution(kernel_scene.xyz_weights, lo, hi)
     if mode == "visible":
         return sampling.visible_distribution(lo, hi)
     if mode == "d65_rejection":
-        from .spectra import illuminant
-
-        return sampling.from_spectrum(illuminant("D65"), lo, hi)
-    if mode == "light" and light_spd.shape[0]:
-        # Each light's radiometric SPD has luminance = strength; weight it by its geometric factor.
-        pairs = [(Spectrum(spd), power / max(float(colorimetry.spectrum_to_xyz(spd)[1]), 1e-30))
-                 for spd, power in zip(light_spd, light_power)]
-        return sampling.composite_light_distribution(pairs, lo, hi)
-    if mode == "light":  # emissive media only: no light spectra to follow
-        return sampling.visible_distribution(lo, hi)
+        return sampling.d65(lo, hi)
+    if mode == "light":
+        return sampling.defensive_composite(light_mode_sources(kernel_scene),
+                                            sampling.colour_distribution(kernel_scene.xyz_weights, lo, hi),
+                                            LIGHT_MODE_DEFENSIVE_SHARE)
     raise SpectralError(f"unknown wavelength sampling {mode!r}")
 
 
 def camera_extent(camera) -> np.ndarray:
-    """Film extent (x, y) and shift (x, y) in camera space: at z = -1 (perspective) or absolute (ortho)."""
+    """Film extent (x, y) and shift (x, y) in camera space: at z = -1 (perspective) or absolute (ortho).
+    The frame's aspect is width · pixel_aspect : height, and AUTO fits its larger side (as Blender)."""
+    aspect = camera.width * camera.pixel_aspect / camera.height
     fit = camera.sensor_fit
     if fit == "AUTO":
-        fit = "HORIZONTAL" if camera.width >= camera.height else "VERTICAL"
+        fit = "HORIZONTAL" if aspect >= 1.0 else "VERTICAL"
     span = 2.0 * np.tan(0.5 * camera.fov) if camera.kind == "perspective" else camera.ortho_scale
-    aspect = camera.width / camera.height
     extent_x, extent_y = (span, span / aspect) if fit == "HORIZONTAL" else (span * aspect, span)
     return np.array([extent_x, extent_y, camera.shift_x * span, camera.shift_y * span])
 
@@ -277,7 +310,7 @@ def compile_scene(scene: Scene) -> KernelScene:
     `with_band` restricts it to one band."""
     settings = scene.validate().settings
     media = _media_arrays(scene.media)
-    lights = _light_arrays(scene.lights, scene.media)
+    lights = _light_arrays(scene.lights, scene.media, settings.cmf)
     camera = scene.camera
     kernel_scene = KernelScene(
         cam_to_world=np.asarray(camera.to_world, dtype=np.float64),
@@ -299,7 +332,6 @@ def compile_scene(scene: Scene) -> KernelScene:
 
 def with_band(kernel_scene: KernelScene, mode: str, lo: float, hi: float) -> KernelScene:
     """The same kernel data with the hero wavelength drawn from [lo, hi] by `mode`."""
-    distribution = wavelength_distribution(mode, kernel_scene.light_spd, kernel_scene.light_power,
-                                           kernel_scene.xyz_weights, lo, hi)
+    distribution = wavelength_distribution(mode, kernel_scene, lo, hi)
     return kernel_scene._replace(lambda_cdf=np.asarray(distribution.cdf, dtype=np.float64),
                                  lambda_pdf=np.asarray(distribution.bin_pdf, dtype=np.float64))

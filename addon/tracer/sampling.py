@@ -12,7 +12,7 @@ They are plain functions of arrays (the NumPy backend calls them on arrays of pa
 inside Numba kernels (`shared_math.shared`), where they are called with one path's scalars.
 
 The seminar report's samplers (§3.2) are here too: uniform over 380–700 nm, D65 by rejection sampling
-(`d65_rejection`, with its pdf) and the UV-extended range; plus the mixture of the lights' spectra, the
+(`d65_rejection`, with its pdf) and the UV-extended range; plus mixtures of spectra (with a defensive share), the
 visible-range importance density, the colour importance (the default: visible density mixed with the
 colour matching functions' norm), and the split of a range into bands for per-wavelength passes.
 """
@@ -157,24 +157,33 @@ def from_spectrum(spectrum: Spectrum, lo=VISIBLE_MIN, hi=VISIBLE_MAX, name="the 
     return BinnedDistribution(_bin_weights(spectrum), lo, hi, what=name)
 
 
-def composite_light_distribution(pairs, lo=VISIBLE_MIN, hi=VISIBLE_MAX) -> BinnedDistribution:
-    """The mixture Σ_k w_k p_k(λ) / Σ_k w_k of the lights' spectra, for `pairs` of (Spectrum, power weight).
-
-    p_k is light k's spectrum normalised over [lo, hi): only its shape counts, and w_k is its share of
-    the emitted power in that range. A light whose spectrum is zero there adds nothing."""
-    lo, hi = _check_range(lo, hi)
-    bins = slice(lo - int(LAMBDA_MIN), hi - int(LAMBDA_MIN))
+def _composite_weights(pairs, bins: slice) -> np.ndarray:
+    """Σ_k w_k p_k per bin, each spectrum's bins normalised to unit sum inside `bins` (zero ones add nothing)."""
     mixture = np.zeros(BINS)
     for spectrum, weight in pairs:
         weight = float(weight)
         if not (np.isfinite(weight) and weight >= 0):
-            raise SpectralError(f"a light's power weight must be finite and non-negative, got {weight}")
+            raise SpectralError(f"a spectrum's mixture weight must be finite and non-negative, got {weight}")
         shape = _bin_weights(spectrum)[bins]
         if np.any(shape < 0):
-            raise SpectralError(f"light spectra must be non-negative in {lo}–{hi} nm")
+            raise SpectralError("spectra must be non-negative to be sampled")
         if shape.sum() > 0:
             mixture[bins] += weight * shape / shape.sum()
-    return BinnedDistribution(mixture, lo, hi, what="light spectra")
+    return mixture
+
+
+def defensive_composite(pairs, defensive: BinnedDistribution, share: float) -> BinnedDistribution:
+    """`share` of the `defensive` density plus 1 − share of the mixture Σ_k w_k p_k / Σ_k w_k of the
+    spectra in `pairs` of (Spectrum, weight) over the same range, where p_k is spectrum k normalised to unit
+    area there (only its shape counts) and w_k its weight; all of the defensive density where the spectra
+    are zero over the range. With a defensive density that is positive wherever light can reach the
+    camera, so is the mixture: it is unbiased for any scene."""
+    if not 0.0 < share <= 1.0:
+        raise SpectralError(f"a defensive share must lie in (0, 1], got {share}")
+    composite = _composite_weights(pairs, slice(defensive.lo - int(LAMBDA_MIN), defensive.hi - int(LAMBDA_MIN)))
+    total = composite.sum()
+    mixture = (1.0 - share) * composite / total + share * defensive.bin_pdf if total > 0 else defensive.bin_pdf
+    return BinnedDistribution(mixture, defensive.lo, defensive.hi, what="the defensive composite")
 
 
 # pbrt-v4's visible-wavelength importance density is proportional to 1 / cosh²(A (λ − C)).
@@ -252,18 +261,27 @@ def rejection_pdf(spectrum: Spectrum, lam, lo, hi) -> np.ndarray:
     return np.where((lam >= lo) & (lam < hi), spectrum(lam) / total, 0.0)
 
 
-def d65_rejection(n, rng: np.random.Generator, lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> np.ndarray:
-    """The report's sampleWavelengthD65: `n` wavelengths ∝ D65 on [lo, hi) by rejection sampling.
+def d65_sampling_shape() -> Spectrum:
+    """D65 (`spectra.illuminant("D65")`, tabulated over 300–780 nm) continued outside its table at its end
+    values (63 % of its 560 nm value at 780 nm), so the D65 samplers have a positive density over the whole
+    grid: a sampling density must be positive wherever light reaches the camera (else that light is lost);
+    its shape there changes the noise, not the mean."""
+    table = illuminant("D65")
+    inside = np.flatnonzero(table.values > 0)
+    return Spectrum(np.interp(GRID, GRID[inside], table.values[inside]))
 
-    D65 is `spectra.illuminant("D65")`, tabulated over 300–780 nm and 0 outside, so no samples fall there."""
-    return rejection_sample(illuminant("D65"), n, rng, lo, hi, name="D65")
+
+def d65_rejection(n, rng: np.random.Generator, lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> np.ndarray:
+    """The report's sampleWavelengthD65: `n` wavelengths ∝ D65 on [lo, hi) by rejection sampling
+    (`d65_sampling_shape`: continued at its end values outside the table's 300–780 nm)."""
+    return rejection_sample(d65_sampling_shape(), n, rng, lo, hi, name="D65")
 
 
 def d65_rejection_pdf(lam, lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> np.ndarray:
     """Density per nm of `d65_rejection`: D65 normalised over [lo, hi)."""
-    return rejection_pdf(illuminant("D65"), lam, lo, hi)
+    return rejection_pdf(d65_sampling_shape(), lam, lo, hi)
 
 
 def d65(lo=REPORT_VISIBLE_MIN, hi=REPORT_VISIBLE_MAX) -> BinnedDistribution:
-    """D65 as a binned pdf for the kernels: the same bin probabilities as `d65_rejection` (0 above 780 nm)."""
-    return from_spectrum(illuminant("D65"), lo, hi, name="D65")
+    """D65 as a binned pdf for the kernels: the same bin probabilities as `d65_rejection`."""
+    return from_spectrum(d65_sampling_shape(), lo, hi, name="D65")

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import checks
+from . import colorimetry
 from .colorimetry import CMF_NAMES as CMFS
 from .errors import SpectralError
 from .phase import HG_G_LIMIT
@@ -26,6 +27,12 @@ CAMERA_KINDS = ("perspective", "orthographic")
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 PHASES = ("hg", "rayleigh")
 LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot")
+# What a light's strength measures: "luminous", its luminance Y (with the render's colour matching
+# functions); "radiant", its radiometric quantity integrated over the whole grid (250–830 nm).
+LIGHT_UNITS = ("luminous", "radiant")
+# The radiant unit of each light kind's strength.
+RADIANT_UNITS = {"sun": "W·m⁻²", "environment": "W·m⁻²·sr⁻¹", "sky": "W·m⁻²·sr⁻¹", "point": "W·sr⁻¹",
+                 "spot": "W·sr⁻¹"}
 WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "colour")
 WAVELENGTHS_PER_PATH = (1, 4)  # the hero alone, or the hero and 3 rotated wavelengths (spectral MIS)
 BACKENDS = ("numba", "numpy")
@@ -92,10 +99,11 @@ class Medium:
 
 @dataclass(frozen=True, eq=False)
 class Light:
-    """One light. `spectrum` is a shape; `strength` sets its luminance Y:
-    sun: irradiance Y on a plane facing it; environment: radiance Y; sky: radiance Y of both its zenith
-    colour (`spectrum`) and its horizon colour, blended linearly by the elevation's sine;
-    point/spot: intensity Y (per steradian)."""
+    """One light. `spectrum` is a shape; `strength` sets its size in `unit` (LIGHT_UNITS): "luminous",
+    the luminance Y of its sun irradiance on a plane facing it, environment radiance, point/spot
+    intensity (per steradian); "radiant", the same quantities in watts over the whole spectrum
+    (RADIANT_UNITS). A sky's zenith colour (`spectrum`) and horizon colour each have that strength,
+    blended linearly by the elevation's sine."""
 
     kind: str  # "sun" | "environment" | "sky" | "point" | "spot"
     spectrum: Spectrum
@@ -108,13 +116,16 @@ class Light:
     spot_blend: float = 0.15  # spot: Blender's smooth edge fraction
     horizon_spectrum: Spectrum | None = None  # sky: colour at the horizon (zenith colour is `spectrum`)
     name: str = ""
+    unit: str = "luminous"  # "luminous" | "radiant"
 
 
 @dataclass(frozen=True, eq=False)
 class Camera:
     """Blender's camera model: looks down its local -Z with +Y up; `to_world` is its world matrix.
     `fov` (radians, perspective) or `ortho_scale` (orthographic) spans the `sensor_fit` axis
-    ("AUTO": the larger image axis, "HORIZONTAL", "VERTICAL"); shifts are in units of that span."""
+    ("AUTO": the larger axis of the frame, "HORIZONTAL", "VERTICAL"); shifts are in units of that span.
+    `pixel_aspect` is a pixel's width ÷ its height (Blender's pixel_aspect_x / pixel_aspect_y): the frame
+    is width · pixel_aspect wide for height tall."""
 
     to_world: np.ndarray
     width: int
@@ -125,6 +136,7 @@ class Camera:
     sensor_fit: str = "AUTO"
     shift_x: float = 0.0
     shift_y: float = 0.0
+    pixel_aspect: float = 1.0
 
 
 def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
@@ -165,17 +177,17 @@ class Scene:
 
     def validate(self) -> "Scene":
         """This scene, or a SpectralError naming the first invalid field (see the module docstring)."""
+        check_settings(self.settings, "render")  # first: the lights' check uses its colour matching functions
         _check_camera(self.camera, "camera")
         for index, medium in enumerate(self.media):
             _check_medium(medium, f"media[{index}]")
         for index, light in enumerate(self.lights):
-            _check_light(light, f"lights[{index}]")
+            _check_light(light, f"lights[{index}]", self.settings.cmf)
         if not self.lights and not any(medium.emission is not None for medium in self.media):
             raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point or spot "
                                 "light (or an emitting medium)")
         if self.lights and not any(light.strength > 0 for light in self.lights):
             raise SpectralError("lights: every light has strength 0, so nothing is lit")
-        check_settings(self.settings, "render")
         return self
 
 
@@ -190,6 +202,7 @@ def _check_camera(camera: Camera, where: str) -> None:
     checks.one_of(camera.sensor_fit, f"{where}.sensor_fit", SENSOR_FITS)
     checks.number(camera.shift_x, f"{where}.shift_x")
     checks.number(camera.shift_y, f"{where}.shift_y")
+    checks.positive(checks.number(camera.pixel_aspect, f"{where}.pixel_aspect"), f"{where}.pixel_aspect")
     affine_matrix(camera.to_world, f"{where}.to_world")
 
 
@@ -281,9 +294,10 @@ def _check_emission(emission: BlackbodyEmission, where: str) -> None:
                             f"non-negative kelvin, found {coldest:g} K")
 
 
-def _check_light(light: Light, where: str) -> None:
+def _check_light(light: Light, where: str, cmf: str) -> None:
     kind = checks.one_of(light.kind, f"{where}.kind", LIGHT_KINDS)
-    _check_light_spectrum(light.spectrum, f"{where}.spectrum")
+    unit = checks.one_of(light.unit, f"{where}.unit", LIGHT_UNITS)
+    _check_light_spectrum(light.spectrum, f"{where}.spectrum", unit, cmf)
     checks.within(checks.number(light.strength, f"{where}.strength"), f"{where}.strength", 0.0)
     if not isinstance(light.name, str):
         raise SpectralError(f"{where}.name: expected a string, found {checks.shown(light.name)}")
@@ -291,7 +305,7 @@ def _check_light(light: Light, where: str) -> None:
         checks.direction(light.direction, f"{where}.direction")
         checks.within(np.degrees(checks.number(light.angle, f"{where}.angle")), f"{where}.angle", 0.0, 180.0)
     if kind == "sky" and light.horizon_spectrum is not None:
-        _check_light_spectrum(light.horizon_spectrum, f"{where}.horizon_spectrum")
+        _check_light_spectrum(light.horizon_spectrum, f"{where}.horizon_spectrum", unit, cmf)
     if kind in ("point", "spot"):
         checks.vector(light.position, f"{where}.position")
     if kind == "spot":
@@ -301,10 +315,13 @@ def _check_light(light: Light, where: str) -> None:
         checks.within(checks.number(light.spot_blend, f"{where}.spot_blend"), f"{where}.spot_blend", 0.0, 1.0)
 
 
-def _check_light_spectrum(spectrum: Spectrum, where: str) -> None:
+def _check_light_spectrum(spectrum: Spectrum, where: str, unit: str, cmf: str) -> None:
     checks.spectrum_within(spectrum.values, where, "a light spectrum must not be negative", 0.0, np.inf)
     if not spectrum.values.any():
         raise SpectralError(f"{where}: the light's spectrum is zero everywhere")
+    if unit == "luminous" and not colorimetry.spectrum_to_xyz(spectrum.values, cmf)[1] > 0:
+        raise SpectralError(f"{where}: the spectrum has no visible part (luminance Y = 0), so a luminous "
+                            "strength cannot scale it: give the light \"unit\": \"radiant\" (watts)")
 
 
 def check_settings(settings: RenderSettings, where: str = "render") -> None:

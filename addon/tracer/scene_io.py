@@ -16,7 +16,7 @@ from .checks import shown
 from .errors import SpectralError
 from .film import check_film_memory, film_bytes
 from .grids import affine_matrix, load_grid, save_grid_npy
-from .scene import LIGHT_KINDS, BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
+from .scene import LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
 from .spectra import Spectrum
 from .wavelengths import GRID
 
@@ -27,7 +27,7 @@ SCENE_FILE = "scene.json"
 _TOP = {"required": ("format", "version", "camera"), "optional": ("media", "lights", "render")}
 _CAMERA = {
     "required": ("to_world", "width", "height"),
-    "optional": ("kind", "fov", "ortho_scale", "sensor_fit", "shift_x", "shift_y"),
+    "optional": ("kind", "fov", "ortho_scale", "sensor_fit", "shift_x", "shift_y", "pixel_aspect"),
 }
 _MEDIUM = {
     "required": ("density", "extinction", "albedo"),
@@ -38,7 +38,7 @@ _ALBEDO_TABLE = {"required": ("densities", "spectra"), "optional": ()}
 _FLUORESCENCE = {"required": ("excitation", "emission", "quantum_yield"), "optional": ()}
 _EMISSION = {"required": ("temperature",), "optional": ("intensity", "temperature_scale", "temperature_offset")}
 _LIGHT_COMMON = ("kind", "spectrum")
-_LIGHT_OPTIONAL = ("strength", "name")
+_LIGHT_OPTIONAL = ("strength", "unit", "name")
 _LIGHT_FIELDS = {
     "sun": {"required": ("direction",), "optional": ("angle",)},
     "environment": {"required": (), "optional": ()},
@@ -124,6 +124,7 @@ def _camera(value, where: str) -> Camera:
         sensor_fit=data.get("sensor_fit", Camera.sensor_fit),
         shift_x=checks.number(data.get("shift_x", 0.0), f"{where}.shift_x"),
         shift_y=checks.number(data.get("shift_y", 0.0), f"{where}.shift_y"),
+        pixel_aspect=checks.number(data.get("pixel_aspect", Camera.pixel_aspect), f"{where}.pixel_aspect"),
     )
 
 
@@ -229,7 +230,7 @@ def _light(value, where: str, folder: Path) -> Light:
         fields["spot_blend"] = checks.number(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend")
     return Light(kind=kind, spectrum=_spectrum(data["spectrum"], f"{where}.spectrum", folder),
                  strength=checks.number(data.get("strength", 1.0), f"{where}.strength"), name=data.get("name", ""),
-                 **fields)
+                 unit=data.get("unit", Light.unit), **fields)
 
 
 def _render(value, where: str) -> RenderSettings:
@@ -314,6 +315,7 @@ def _camera_json(camera: Camera) -> dict:
         "sensor_fit": camera.sensor_fit,
         "shift_x": float(camera.shift_x),
         "shift_y": float(camera.shift_y),
+        "pixel_aspect": float(camera.pixel_aspect),
     }
 
 
@@ -365,6 +367,7 @@ def _spectrum_json(spectrum: Spectrum):
 def _light_json(light: Light) -> dict:
     data = {"kind": light.kind, "name": light.name, "spectrum": _spectrum_json(light.spectrum)}
     data["strength"] = float(light.strength)
+    data["unit"] = light.unit
     if light.kind == "sun":
         data["direction"] = _floats(light.direction)
         data["angle"] = float(np.degrees(light.angle))
@@ -449,7 +452,8 @@ def _world_bounds(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _describe_light(light: Light) -> str:
-    text = f"light {light.name or '(unnamed)'!r}: {light.kind}, strength {light.strength:g}"
+    unit = RADIANT_UNITS[light.kind] if light.unit == "radiant" else "(luminance Y)"
+    text = f"light {light.name or '(unnamed)'!r}: {light.kind}, strength {light.strength:g} {unit}"
     if light.kind == "sun":
         text += f", towards ({', '.join(f'{c:.3g}' for c in light.direction)}), {np.degrees(light.angle):.3g}° wide"
     if light.kind in ("point", "spot"):

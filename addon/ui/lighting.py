@@ -10,14 +10,15 @@ SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT")
 
 
 def draw_light(layout, light) -> None:
-    """Brightness and size (the sun's Angle softens its shadows; the tracer's point and spot lights are
-    points, so their Radius is greyed out and says why), then the spectrum."""
+    """Brightness and its unit, size (the sun's Angle softens its shadows; the tracer's point and spot
+    lights are points, so their Radius is greyed out and says why), then the spectrum."""
     if light.type not in SUPPORTED_LIGHTS:
         layout.label(text=iface_("{} lights are not rendered spectrally (sun, point, spot are)").format(
             iface_(light.bl_rna.properties["type"].enum_items[light.type].name)), translate=False, icon="ERROR")
         return
     column = layout.column()
     column.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
+    column.prop(light.spectral, "unit")
     if light.type == "SUN":
         column.prop(light, "angle")
     else:
@@ -33,6 +34,7 @@ def draw_world(layout, world) -> None:
     layout.active = settings.enabled
     layout.prop(settings, "kind")
     layout.prop(settings, "strength")
+    layout.prop(settings, "unit")
     draw_spectrum(layout, settings.spectrum, "Zenith" if settings.kind == "sky" else "Spectrum", presets=True)
     if settings.kind == "sky":
         draw_spectrum(layout, settings.horizon, "Horizon", presets=True)

@@ -249,15 +249,19 @@ def _film_point(camera, px, py):
 
 CAMERA_CASES = [(kind, fit, size) for kind in ("PERSP", "ORTHO") for fit in ("AUTO", "HORIZONTAL", "VERTICAL")
                 for size in ((40, 30), (30, 40))]
+# Pixel aspects x:y: square, and non-square ones that keep or swap the frame's larger axis (AUTO's fit).
+PIXEL_ASPECTS = ((1.0, 1.0), (2.0, 1.0), (1.0, 1.7), (1.0, 1.2))
 
 
+@pytest.mark.parametrize("pixel_aspect", PIXEL_ASPECTS, ids=lambda aspect: f"{aspect[0]:g}:{aspect[1]:g}")
 @pytest.mark.parametrize("kind, fit, size", CAMERA_CASES)
-def test_camera_frame_matches_blender_view_frame(registered, kind, fit, size):
+def test_camera_frame_matches_blender_view_frame(registered, kind, fit, size, pixel_aspect):
     scene = bpy.context.scene
     data = add_camera().data
     data.type, data.sensor_fit, data.lens, data.ortho_scale = kind, fit, 35.0, 5.0
     data.sensor_width, data.sensor_height, data.shift_x, data.shift_y = 36.0, 20.0, 0.1, -0.05
     scene.render.resolution_x, scene.render.resolution_y = size
+    scene.render.pixel_aspect_x, scene.render.pixel_aspect_y = pixel_aspect
     exported = camera_export.export_camera(scene)
     corners = np.array([corner[:] for corner in data.view_frame(scene=scene)])
     if kind == "PERSP":
@@ -299,12 +303,12 @@ def test_unit_scale_makes_materials_per_metre(registered, tmp_path):
 def test_settings_the_tracer_cannot_follow_are_warned(registered, tmp_path):
     scene, _cloud = basic_scene(tmp_path)
     assert _export().warnings == []
+    scene.render.pixel_aspect_x = 2.0  # followed (test_camera_frame_matches_blender_view_frame)
+    assert _export().warnings == []
     scene.render.use_motion_blur = True
-    scene.render.pixel_aspect_x = 2.0
     warnings = _export().warnings
-    assert len(warnings) == 2
+    assert len(warnings) == 1
     assert warnings[0].startswith("motion blur is not supported")
-    assert warnings[1].startswith("pixel aspect 2:1 is not supported: rendered with square pixels")
 
 
 def test_lights_and_world(registered, tmp_path):
@@ -336,6 +340,20 @@ def test_lights_and_world(registered, tmp_path):
     assert lights["Spot"].spot_size == pytest.approx(math.radians(30))
     assert lights["Spot"].spot_blend == pytest.approx(0.3)
     assert lights["Sky"].kind == "sky" and lights["Sky"].strength == 0.5 and lights["Sky"].horizon_spectrum is not None
+    assert {light.unit for light in lights.values()} == {"luminous"}  # the default
+
+
+def test_light_and_world_units_are_exported(registered, tmp_path):
+    """A UV lamp's Power in watts: Radiant makes the tracer's intensity P / (4π) W/sr over its spectrum."""
+    basic_scene(tmp_path)
+    lamp = link(bpy.data.objects.new("UV lamp", bpy.data.lights.new("UV lamp", "POINT")))
+    lamp.data.energy, lamp.data.spectral.unit = 20.0, "radiant"
+    bpy.context.scene.world = bpy.data.worlds.new("UV world")
+    bpy.context.scene.world.spectral.unit = "radiant"
+    lights = {light.name: light for light in _export().scene.lights}
+    assert lights["UV lamp"].unit == "radiant" and lights["UV world"].unit == "radiant"
+    assert lights["Sun"].unit == "luminous"
+    assert lights["UV lamp"].strength == pytest.approx(20.0 / (4 * math.pi))
 
 
 def test_missing_vdb_file_is_named(registered, tmp_path):

@@ -4,7 +4,7 @@ metamer design, the absorbed-power integral and the display filter."""
 import numpy as np
 
 from addon.tracer import spectra
-from addon.tracer.compile import luminance_scale
+from addon.tracer.compile import strength_scale
 from addon.tracer.scene import Fluorescence
 from demo_blends import display, metamers, metrics, scenes
 from tests.support.scenes import box_grid, medium
@@ -49,7 +49,7 @@ def test_absorbed_power_of_an_opaque_box_is_its_shadow_times_the_irradiance():
     lamp = scenes.FROG_ENERGY_LAMP
     irradiance = metrics.light_xyz(lamp)  # checks the units path too: Y of the irradiance is the strength
     assert np.isclose(irradiance[1], lamp.strength)
-    total = (lamp.spectrum.values * luminance_scale(lamp)).sum()
+    total = (lamp.spectrum.values * strength_scale(lamp)).sum()
     # The trilinear density falls to zero one cell beyond the outer cell centres, so an opaque box's
     # shadow is one cell wider than its nominal size on each axis: (1 + 1/8) × (2 + 2/8).
     assert np.isclose(metrics.absorbed_power(box, lamp), total * 1.125 * 2.25, rtol=0.01)

@@ -80,7 +80,8 @@ def fluorescence():
     slab = s.box_grid(cells=(16, 16, 4), size=(6.0, 6.0, 0.4))
     fluorophore = Fluorescence(spectra.window(spectra.constant(3.0), 300, 340), spectra.gaussian(550, 20), 0.8)
     medium = s.medium(slab, extinction=0.5, albedo=0.9, g=0.2, fluorescence=fluorophore)
-    uv = Light(kind="environment", spectrum=spectra.window(spectra.constant(1.0), 280, 350), strength=1.0)
+    uv = Light(kind="environment", spectrum=spectra.window(spectra.constant(1.0), 280, 350), strength=580.0,
+               unit="radiant")  # 580 W·m⁻²·sr⁻¹: the radiance of the old rule for a strength-1 UV light
     return s.scene(s.ortho_camera(8, 8, scale=2.0), [medium], [uv, s.sun([0, 0.3, 1], 0.3)])
 
 

@@ -42,7 +42,8 @@ DISTRIBUTIONS = {
     "visible": lambda: sampling.visible_distribution(),
     "colour": lambda: sampling.colour_distribution(xyz_weights()),
     "d65 binned": lambda: sampling.d65(360, 830),
-    "two lights": lambda: sampling.composite_light_distribution([(gaussian(420, 10), 1.0), (constant(2.0), 3.0)]),
+    "two lights": lambda: sampling.defensive_composite([(gaussian(420, 10), 1.0), (constant(2.0), 3.0)],
+                                                       sampling.visible_distribution(), 0.2),
 }
 
 
@@ -100,13 +101,22 @@ def test_visible_distribution_is_pbrts_density_per_bin():
         assert dist.bin_pdf[lam - 250] == pytest.approx(integrate.quad(density, lam, lam + 1)[0] / total, rel=1e-10)
 
 
-def test_composite_is_the_power_weighted_mixture():
-    blue = gaussian(420, 5)  # its scale does not matter: only the shape and the power weight count
+def test_defensive_composite_is_the_weighted_mixture_of_shapes_plus_the_defensive_share():
+    blue = gaussian(420, 5)  # its scale does not matter: only the shape and the weight count
     red = gaussian(650, 5, height=100.0)
-    dist = sampling.composite_light_distribution([(blue, 1.0), (red, 3.0), (constant(0.0), 5.0)], 360, 830)
-    assert dist.cdf[540 - 250] == pytest.approx(0.25, abs=1e-12)
+    visible = sampling.visible_distribution(360, 830)
+    dist = sampling.defensive_composite([(blue, 1.0), (red, 3.0), (constant(0.0), 5.0)], visible, 0.2)
+    assert dist.cdf[540 - 250] == pytest.approx(0.8 * 0.25 + 0.2 * visible.cdf[540 - 250], abs=1e-12)
     only_blue = sampling.from_spectrum(blue, 360, 830)
-    assert np.allclose(dist.bin_pdf[: 540 - 250], 0.25 * only_blue.bin_pdf[: 540 - 250], rtol=1e-9, atol=1e-15)
+    expected = 0.8 * 0.25 * only_blue.bin_pdf + 0.2 * visible.bin_pdf
+    assert np.allclose(dist.bin_pdf[: 540 - 250], expected[: 540 - 250], rtol=1e-9, atol=1e-15)
+    assert np.all(dist.bin_pdf[360 - 250 :] > 0)  # positive everywhere the defensive density is
+
+
+def test_defensive_composite_of_spectra_zero_in_the_range_is_the_defensive_density():
+    visible = sampling.visible_distribution(360, 830)
+    dist = sampling.defensive_composite([(UV_ONLY, 1.0)], visible, 0.2)
+    assert np.allclose(dist.bin_pdf, visible.bin_pdf, rtol=1e-12, atol=0)
 
 
 def test_d65_rejection_sampling_matches_its_pdf():
@@ -130,7 +140,9 @@ def test_d65_binned_has_the_rejection_samplers_bin_probabilities():
 def test_d65_pdf_is_the_shared_illuminant_normalised():
     d65 = illuminant("D65")
     assert sampling.d65_rejection_pdf(560.0) == pytest.approx(100.0 / np.trapezoid(d65.values[380 - 250 : 701 - 250]))
-    assert np.all(sampling.d65(360, 830).bin_pdf[781 - 250 :] == 0)  # the dataset ends at 780 nm
+    # The dataset ends at 780 nm; the sampling density carries on at its 780 nm value.
+    assert np.allclose(sampling.d65(360, 830).bin_pdf[780 - 250 :], sampling.d65(360, 830).bin_pdf[780 - 250])
+    assert sampling.d65(360, 830).bin_pdf[829 - 250] > 0.5 * sampling.d65(360, 830).bin_pdf[560 - 250]
 
 
 def test_rejection_sampling_of_any_spectrum():
@@ -161,7 +173,8 @@ def test_stratified_draws_are_one_in_each_stratum_of_u():
 
 
 def test_numba_and_numpy_forms_agree_exactly():
-    dist = sampling.composite_light_distribution([(gaussian(420, 10), 1.0), (constant(1.0), 1.0)], 300, 800)
+    dist = sampling.defensive_composite([(gaussian(420, 10), 1.0), (constant(1.0), 1.0)],
+                                        sampling.uniform(300, 800), 0.2)
     u = np.concatenate((np.random.default_rng(7).random(500), [0.0, 1.0 - 2.0**-53, 1.0]))
     lam = np.concatenate((sampling.sample_binned(dist.cdf, u), [250.0, 299.999, 800.0, 829.9999, 830.0, 100.0]))
     sample_jit, pdf_jit, stratified_jit = (jit(f) for f in (sampling.sample_binned, sampling.pdf_binned,
@@ -187,11 +200,9 @@ def test_band_ranges():
 @pytest.mark.parametrize(
     "call, message",
     [
-        (lambda: sampling.composite_light_distribution([(constant(0.0), 1.0), (UV_ONLY, 2.0)]),
-         "light spectra are zero in 360–830 nm"),
-        (lambda: sampling.composite_light_distribution([]), "light spectra are zero in 360–830 nm"),
-        (lambda: sampling.composite_light_distribution([(constant(1.0), -1.0)]), "non-negative"),
-        (lambda: sampling.composite_light_distribution([(constant(-1.0), 1.0)]), "non-negative"),
+        (lambda: sampling.defensive_composite([(constant(1.0), -1.0)], sampling.uniform(), 0.2), "non-negative"),
+        (lambda: sampling.defensive_composite([(constant(-1.0), 1.0)], sampling.uniform(), 0.2), "non-negative"),
+        (lambda: sampling.defensive_composite([], sampling.uniform(), 0.0), r"share must lie in \(0, 1\]"),
         (lambda: sampling.from_spectrum(UV_ONLY, 400, 830, name="emission"), "emission are zero in 400–830 nm"),
         (lambda: sampling.BinnedDistribution(-np.ones(580), 400, 500), "non-negative"),
         (lambda: sampling.BinnedDistribution(np.ones(10), 400, 500), "580 values"),

@@ -50,9 +50,10 @@ def full_scene() -> Scene:
         Light("sky", spectra.constant(0.5), 0.1),
         Light("point", spectra.constant(1.0), 10.0, position=np.array([1.0, 2.0, 3.0])),
         Light("spot", spectra.gaussian(365, 8), 40.0, position=np.array([0, -3.0, 2]),
-              spot_direction=np.array([0.0, 0.6, -0.8]), spot_size=np.radians(25), spot_blend=0.3, name="UV"),
+              spot_direction=np.array([0.0, 0.6, -0.8]), spot_size=np.radians(25), spot_blend=0.3, name="UV",
+              unit="radiant"),
     )
-    camera = Camera(turn, 32, 24, "orthographic", np.radians(50), 4.5, "VERTICAL", 0.1, -0.05)
+    camera = Camera(turn, 32, 24, "orthographic", np.radians(50), 4.5, "VERTICAL", 0.1, -0.05, 1.25)
     settings = RenderSettings(8, 3, 20, 2, "uv", 1, 300.0, 700.0, 4, "wyman3", "numpy")
     return Scene(camera, (smoke, haze), lights, settings)
 
@@ -187,6 +188,11 @@ BAD = [
     ("camera.kind", "fisheye", ["camera.kind", "'fisheye'", "perspective, orthographic"]),
     ("camera.fov", 180, ["camera.fov: must be within (0, 180)"]),
     ("camera.sensor_fit", "auto", ["camera.sensor_fit", "AUTO, HORIZONTAL, VERTICAL"]),
+    ("camera.pixel_aspect", 0, ["camera.pixel_aspect: must be positive, found 0"]),
+    ("lights[0].unit", "watts", ["lights[0].unit", "'watts'", "luminous, radiant"]),
+    ("lights[0].spectrum", {"type": "table", "wavelengths": [300, 350], "values": [1, 1]},
+     ["lights[0].spectrum: the spectrum has no visible part", '"unit": "radiant"']),
+    ("camera.pixel_aspect", "wide", ["camera.pixel_aspect", "'wide'"]),
     ("camera.to_world", [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [1, 2, 3, 1]], ["camera.to_world", "transposed"]),
     ("camera.to_world", [[1, 0, 0], [0, 1, 0], [0, 0, 1]], ["camera.to_world", "4 lists of 4"]),
     ("media", {}, ["media: expected a list"]),
