@@ -72,7 +72,7 @@ class BandPlan:
 class _Probe:
     """One seen colour: full spectrum `light · medium_factor(a, ε)` with `factor` applied alike to band means."""
 
-    light: np.ndarray  # (GRID.size,) at luminance 1
+    light: np.ndarray  # (GRID.size,) at unit strength, or a glow's Planck spectrum
     medium: object  # tracer Medium or None (the light seen directly)
     factor: str  # "light" | "single" | "phase" | "thick" | "thin" | "transmitted" | "scattered" | "glow"
     depth: float = 0.0  # relative optical depth τ ("transmitted", "scattered")
@@ -85,7 +85,7 @@ def _thick(albedo):
     return (1.0 - s) / (1.0 + s)
 
 
-def _apply(probe: _Probe, albedo, extinction, extinction_peak: float, anisotropy, glow=None):
+def _apply(probe: _Probe, albedo, extinction, extinction_peak: float, anisotropy):
     """The probe's medium factor at these albedos, extinctions and anisotropies (spectra or band means)."""
     relative = np.asarray(extinction, dtype=np.float64) / extinction_peak
     if probe.factor == "light":
@@ -102,7 +102,7 @@ def _apply(probe: _Probe, albedo, extinction, extinction_peak: float, anisotropy
         return np.exp(-probe.depth * relative)
     if probe.factor == "scattered":
         return albedo * relative * np.exp(-probe.depth * relative)
-    return glow * (1.0 - albedo)
+    return 1.0 - albedo  # "glow": emission σ_a · Planck, relative to σ_t
 
 
 def _varies(values, inside) -> bool:
@@ -147,14 +147,10 @@ def _probes(scene: Scene, inside: np.ndarray) -> list[_Probe]:
                 probes.append(_Probe(shape, medium, "thin"))
                 probes += [_Probe(shape, medium, "scattered", depth) for depth in TRANSMITTANCE_DEPTHS]
         if medium.emission is not None:
-            probes.append(_Probe(np.ones(GRID.size), medium, "glow"))
+            hottest = parameters.hottest_temperature(medium.emission)
+            glow = spectra.planck(GRID, hottest) if hottest > 0 else np.zeros(GRID.size)
+            probes.append(_Probe(glow, medium, "glow"))
     return probes
-
-
-def _hottest(medium) -> float:
-    emission = medium.emission
-    kelvin = emission.temperature.values * emission.temperature_scale + emission.temperature_offset
-    return float(np.max(kelvin, initial=0.0))
 
 
 class _Estimator:
@@ -184,19 +180,20 @@ class _Estimator:
         medium = probe.medium
         if medium is None:
             return probe.light
-        glow = None
-        if probe.factor == "glow":
-            hottest = _hottest(medium)
-            glow = spectra.planck(GRID, hottest) if hottest > 0 else np.zeros(GRID.size)
         return probe.light * _apply(probe, medium.albedo_table[probe.level], medium.extinction.values,
-                                    self._extinction_peak(medium), medium.anisotropy.values, glow)
+                                    self._extinction_peak(medium), medium.anisotropy.values)
 
     def _extinction_peak(self, medium) -> float:
         return max(float(medium.extinction.values[self.inside].max()), 1e-300)
 
     def delta_e(self, bands: bandlib.Bands) -> np.ndarray:
         """ΔE00 of each probe with these bands."""
+        return self.evaluate(bands)[0]
+
+    def evaluate(self, bands: bandlib.Bands) -> tuple[np.ndarray, int]:
+        """ΔE00 of each probe with these bands, and the Cycles renders they need (`bands.pack`)."""
         media = {id(medium): parameters.medium_bands(medium, bands, self.cmf) for medium in self.scene.media}
+        renders = len(bandlib.pack([tuple(m.phase_key(k) for m in media.values()) for k in range(bands.count)]))
         weights = bandlib.xyz_weights(bands, self.cmf, parameters.reference_spectrum(self.scene.lights,
                                                                                       tuple(media.values())))
         emulated = []
@@ -206,15 +203,11 @@ class _Estimator:
                 emulated.append(light)
                 continue
             m = media[id(probe.medium)]
-            glow = None
-            if probe.factor == "glow":
-                hottest = _hottest(probe.medium)
-                glow = bandlib.band_means(spectra.planck(GRID, hottest) if hottest > 0 else np.zeros(GRID.size),
-                                          bands, self.cmf)
             emulated.append(light * _apply(probe, m.albedo[probe.level], m.extinction,
-                                           self._extinction_peak(probe.medium), m.anisotropy, glow))
+                                           self._extinction_peak(probe.medium), m.anisotropy))
         band_xyz = np.array(emulated) @ weights
-        return _delta_e00(self.full_xyz * self.scale[:, None], band_xyz * self.scale[:, None], self.whites)
+        return (_delta_e00(self.full_xyz * self.scale[:, None], band_xyz * self.scale[:, None], self.whites),
+                renders)
 
     def variation(self) -> np.ndarray:
         """Per-nanometre relative variation of the probes' spectra (mean over probes, each over its peak)."""
@@ -247,11 +240,6 @@ def _placed(density: np.ndarray, lo: float, hi: float, count: int) -> bandlib.Ba
     return bandlib.Bands(tuple(edges))
 
 
-def _renders(scene: Scene, bands: bandlib.Bands) -> int:
-    media = [parameters.medium_bands(medium, bands, scene.settings.cmf) for medium in scene.media]
-    return len(bandlib.pack([tuple(m.phase_key(k) for m in media) for k in range(bands.count)]))
-
-
 def estimate(scene: Scene, bands: bandlib.Bands) -> float:
     """The largest ΔE00 over the scene's probes with these bands."""
     return float(_Estimator(scene).delta_e(bands).max())
@@ -272,9 +260,9 @@ def plan_bands(scene: Scene, target: float = TARGET_DELTA_E, max_renders: int = 
         candidates = [bandlib.split(lo, hi, count), _placed(density, lo, hi, count)]
         scored = []
         for bands in (candidate for candidate in candidates if candidate is not None):
-            renders = _renders(scene, bands)
+            errors, renders = estimator.evaluate(bands)
             if renders <= max_renders:
-                scored.append((float(estimator.delta_e(bands).max()), renders, bands))
+                scored.append((float(errors.max()), renders, bands))
         if not scored:
             if count >= bandlib.CHANNELS * max_renders:
                 break

@@ -86,12 +86,16 @@ def medium_bands(medium: Medium, bands: bandlib.Bands, cmf: str = "cie1931") -> 
                        thermal=None if medium.emission is None else thermal_bands(medium.emission, bands, cmf))
 
 
+def hottest_temperature(emission) -> float:
+    """The highest temperature (kelvin) a blackbody emission's grid holds (0 for an empty grid)."""
+    kelvin = emission.temperature.values * emission.temperature_scale + emission.temperature_offset
+    return float(np.max(kelvin, initial=0.0))
+
+
 def thermal_bands(emission, bands: bandlib.Bands, cmf: str = "cie1931") -> ThermalBands:
     """The blackbody table over the temperatures the grid holds (the tracer evaluates Planck's law exactly;
     this is linear between THERMAL_SAMPLES temperatures)."""
-    kelvin = emission.temperature.values * emission.temperature_scale + emission.temperature_offset
-    hottest = float(np.max(kelvin, initial=0.0))
-    temperatures = np.linspace(0.0, max(hottest, 1.0), THERMAL_SAMPLES)
+    temperatures = np.linspace(0.0, max(hottest_temperature(emission), 1.0), THERMAL_SAMPLES)
     planck = spectra.planck(GRID[None, :], np.maximum(temperatures, 1e-3)[:, None])
     planck[0] = 0.0
     return ThermalBands(temperatures=temperatures, radiance=bandlib.band_means(planck, bands, cmf),
