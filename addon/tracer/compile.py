@@ -5,80 +5,16 @@ light spectra scaled to their strength, majorant grids, the hero-wavelength dist
 XYZ weights. Both backends read the same `KernelScene`, so they cannot disagree about the scene.
 """
 
-from typing import NamedTuple
-
 import numpy as np
 
 from . import colorimetry, sampling
 from .errors import SpectralError
+from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, LIGHT_SKY, PHASES, KernelScene
 from .majorant import block_size_for, majorant_grid
 from .planck import planck_radiance
-from .scene import CAMERA_KINDS as CAMERAS, LIGHT_KINDS as LIGHTS, PHASES, WAVELENGTHS_PER_PATH
 from .scene import Grid, Light, Medium, Scene
 from .spectra import Spectrum
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
-
-# The kernels' integer codes of the scene's enumerations (numba_backend repeats them as literals).
-LIGHT_KINDS = {kind: code for code, kind in enumerate(LIGHTS)}
-PHASE_KINDS = {phase: code for code, phase in enumerate(PHASES)}
-CAMERA_KINDS = {kind: code for code, kind in enumerate(CAMERAS)}
-MAX_WAVELENGTHS_PER_PATH = max(WAVELENGTHS_PER_PATH)
-# Shadow rays whose every transmittance is below this play Russian roulette, stopping with this probability.
-SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
-
-
-class KernelScene(NamedTuple):
-    # camera
-    cam_to_world: np.ndarray  # (4, 4)
-    cam_kind: int
-    width: int
-    height: int
-    cam_extent: np.ndarray  # (4,): film extent x, y and shift x, y (camera-space units at z = -1 or ortho)
-    # media (M); grids flattened into one array each with offsets and shapes
-    density_data: np.ndarray
-    density_offset: np.ndarray
-    density_shape: np.ndarray  # (M, 3)
-    world_to_padded: np.ndarray  # (M, 4, 4): world → padded index space of the density grid
-    majorant_data: np.ndarray
-    majorant_offset: np.ndarray
-    majorant_shape: np.ndarray  # (M, 3)
-    majorant_block: np.ndarray  # (M,) cells per block
-    majorant_coeff: np.ndarray  # (M,) density_scale · max over λ of (extinction + excitation)
-    density_scale: np.ndarray  # (M,)
-    extinction: np.ndarray  # (M, GRID)
-    excitation: np.ndarray  # (M, GRID) fluorophore absorption per unit density
-    anisotropy: np.ndarray  # (M, GRID)
-    phase_kind: np.ndarray  # (M,)
-    albedo_densities: np.ndarray  # (M, Lmax)
-    albedo_count: np.ndarray  # (M,)
-    albedo_table: np.ndarray  # (M, Lmax, GRID)
-    fluor_strength: np.ndarray  # (M,) quantum_yield · ∫excitation dλ
-    emission_pdf: np.ndarray  # (M, GRID) fluorescence emission pdf per nm
-    excitation_cdf: np.ndarray  # (M, GRID) binned cdf for sampling λ_in ∝ excitation
-    excitation_pdf: np.ndarray  # (M, GRID - 1)
-    temperature_data: np.ndarray
-    temperature_offset: np.ndarray  # (M,) -1 when the medium has no emission
-    temperature_shape: np.ndarray  # (M, 3)
-    temperature_world_to_padded: np.ndarray  # (M, 4, 4)
-    temperature_map: np.ndarray  # (M, 3): scale, offset, intensity
-    # lights (NL)
-    light_kind: np.ndarray
-    light_spd: np.ndarray  # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky), intensity (point/spot)
-    light_spd_horizon: np.ndarray  # (NL, GRID) sky only
-    light_dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots
-    light_pos: np.ndarray  # (NL, 3)
-    light_cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
-    light_smooth: np.ndarray  # (NL,) spot edge width in cosine
-    light_pmf: np.ndarray  # (NL,) selection probability for next-event estimation
-    light_power: np.ndarray  # (NL,) power proxy (`_proxy_luminance` × geometry) that `light_pmf` normalises
-    # wavelengths and colour
-    lambda_cdf: np.ndarray  # (GRID,) binned cdf of the hero wavelength in this band
-    lambda_pdf: np.ndarray  # (GRID - 1,)
-    wavelengths_per_path: int
-    xyz_weights: np.ndarray  # (3, GRID)
-    # path settings
-    max_depth: int
-    rr_depth: int
 
 
 def _world_to_padded(grid: Grid) -> np.ndarray:
@@ -109,7 +45,7 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
         "extinction": np.array([m.extinction.values for m in media]).reshape(count, GRID.size),
         "excitation": np.zeros((count, GRID.size)),
         "anisotropy": np.array([m.anisotropy.values for m in media]).reshape(count, GRID.size),
-        "phase_kind": np.array([PHASE_KINDS[m.phase] for m in media], dtype=np.int64),
+        "phase_kind": np.array([PHASES.index(m.phase) for m in media], dtype=np.int64),
         "albedo_densities": np.zeros((count, levels)),
         "albedo_count": np.array([m.albedo_densities.size for m in media], dtype=np.int64),
         "albedo_table": np.zeros((count, levels, GRID.size)),
@@ -203,7 +139,7 @@ def _light_arrays(lights: tuple[Light, ...], media, cmf: str) -> dict:
     centre, radius = _scene_centre_and_radius(media)
     count = len(lights)
     out = {
-        "light_kind": np.array([LIGHT_KINDS[light.kind] for light in lights], dtype=np.int64),
+        "light_kind": np.array([LIGHT_KINDS.index(light.kind) for light in lights], dtype=np.int64),
         "light_spd": np.array([light.spectrum.values * strength_scale(light, cmf=cmf) for light in lights]).reshape(
             count, GRID.size),
         "light_spd_horizon": np.zeros((count, GRID.size)),
@@ -255,7 +191,7 @@ def light_mode_sources(kernel_scene: KernelScene) -> list[tuple[Spectrum, float]
     ks = kernel_scene
     sources = []
     for kind, spd, horizon, pmf in zip(ks.light_kind, ks.light_spd, ks.light_spd_horizon, ks.light_pmf):
-        if kind == LIGHT_KINDS["sky"]:
+        if kind == LIGHT_SKY:
             sources += [(Spectrum(spd), 0.5 * pmf), (Spectrum(horizon), 0.5 * pmf)]
         else:
             sources.append((Spectrum(spd), pmf))
@@ -314,7 +250,7 @@ def compile_scene(scene: Scene) -> KernelScene:
     camera = scene.camera
     kernel_scene = KernelScene(
         cam_to_world=np.asarray(camera.to_world, dtype=np.float64),
-        cam_kind=CAMERA_KINDS[camera.kind],
+        cam_kind=CAMERA_KINDS.index(camera.kind),
         width=int(camera.width),
         height=int(camera.height),
         cam_extent=camera_extent(camera),

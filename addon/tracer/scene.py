@@ -8,7 +8,8 @@ NumPy arrays acting on column vectors (world = M @ [x, y, z, 1]).
 A scene checks itself, whoever built it: `Scene.validate()` (called by `scene_io.load_scene` and
 `save_scene` and by `compile.compile_scene`) raises a SpectralError naming the field by its scene-file
 path and in the file's units (`media[0].albedo: ...`, `camera.fov` in degrees). The enumerations of the
-format are defined here, once.
+format are defined here, once, except those the kernels switch on (kinds of camera and light, phase
+functions, wavelengths per path), which `kernels/layout.py` defines beside their codes.
 """
 
 from dataclasses import dataclass, field
@@ -19,14 +20,12 @@ from . import checks
 from . import colorimetry
 from .colorimetry import CMF_NAMES as CMFS
 from .errors import SpectralError
+from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, PHASES, WAVELENGTHS_PER_PATH
 from .phase import HG_G_LIMIT
 from .spectra import Spectrum
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
-CAMERA_KINDS = ("perspective", "orthographic")
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
-PHASES = ("hg", "rayleigh")
-LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot")
 # What a light's strength measures: "luminous", its luminance Y (with the render's colour matching
 # functions); "radiant", its radiometric quantity integrated over the whole grid (250–830 nm).
 LIGHT_UNITS = ("luminous", "radiant")
@@ -34,7 +33,6 @@ LIGHT_UNITS = ("luminous", "radiant")
 RADIANT_UNITS = {"sun": "W·m⁻²", "environment": "W·m⁻²·sr⁻¹", "sky": "W·m⁻²·sr⁻¹", "point": "W·sr⁻¹",
                  "spot": "W·sr⁻¹"}
 WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "colour")
-WAVELENGTHS_PER_PATH = (1, 4)  # the hero alone, or the hero and 3 rotated wavelengths (spectral MIS)
 BACKENDS = ("numba", "numpy")
 SEED_MAX = 2**64 - 1  # seeds are unsigned 64-bit integers in the kernels' random streams
 # Delta and ratio tracking take about one step per unit of optical depth (through the majorant) along a

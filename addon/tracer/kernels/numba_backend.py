@@ -25,9 +25,18 @@ import numpy as np
 from numba import njit, prange
 
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
-from ..compile import MAX_WAVELENGTHS_PER_PATH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
 from ..planck import planck_radiance
 from ..sampling import pdf_binned, sample_binned
+from .layout import (
+    LIGHT_ENVIRONMENT,
+    LIGHT_SKY,
+    LIGHT_SPOT,
+    LIGHT_SUN,
+    MAX_WAVELENGTHS_PER_PATH,
+    PHASE_RAYLEIGH,
+    SHADOW_ROULETTE_BELOW,
+    SHADOW_ROULETTE_STOP,
+)
 from .numba_cache import cached
 from .rng import path_key, uniform
 
@@ -38,8 +47,6 @@ jit = functools.partial(njit, error_model="numpy")
 
 MAX_LAMBDAS = MAX_WAVELENGTHS_PER_PATH
 INF = np.inf
-LIGHT_SUN, LIGHT_ENVIRONMENT, LIGHT_SKY, LIGHT_POINT, LIGHT_SPOT = 0, 1, 2, 3, 4
-PHASE_HG, PHASE_RAYLEIGH = 0, 1
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
 # Rows of the per-path spectral cache spec[medium, row, wavelength] (filled when wavelengths change).
 SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO = 0, 1, 2, 3, 4

@@ -19,20 +19,26 @@ which can send a path down another branch). Masked lanes may compute values that
 
 import numpy as np
 
-from ..compile import CAMERA_KINDS, LIGHT_KINDS, PHASE_KINDS, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
 from ..sampling import pdf_binned, sample_binned
 from ..wavelengths import GRID, LAMBDA_MIN
+from .layout import (
+    CAMERA_PERSPECTIVE as PERSPECTIVE,
+    LIGHT_ENVIRONMENT as ENVIRONMENT,
+    LIGHT_SKY as SKY,
+    LIGHT_SPOT as SPOT,
+    LIGHT_SUN as SUN,
+    PHASE_RAYLEIGH,
+    SHADOW_ROULETTE_BELOW,
+    SHADOW_ROULETTE_STOP,
+)
 from .rng import path_key, uniform
 
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
 INF = np.inf
 INV_FOUR_PI = 0.25 / np.pi
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
-PHASE_RAYLEIGH = PHASE_KINDS["rayleigh"]
-PERSPECTIVE = CAMERA_KINDS["perspective"]
-SUN, ENVIRONMENT, SKY, SPOT = LIGHT_KINDS["sun"], LIGHT_KINDS["environment"], LIGHT_KINDS["sky"], LIGHT_KINDS["spot"]
 
 
 class _Batch:
