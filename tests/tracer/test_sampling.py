@@ -9,7 +9,7 @@ import pytest
 from numba import njit as jit
 from scipy import integrate
 
-from addon.tracer import sampling
+from addon.tracer import binned, sampling
 from addon.tracer.colorimetry import xyz_weights
 from tests.support.statistics import chi_square_pvalue as counts_pvalue
 from addon.tracer.errors import SpectralError
@@ -176,13 +176,13 @@ def test_numba_and_numpy_forms_agree_exactly():
     dist = sampling.defensive_composite([(gaussian(420, 10), 1.0), (constant(1.0), 1.0)],
                                         sampling.uniform(300, 800), 0.2)
     u = np.concatenate((np.random.default_rng(7).random(500), [0.0, 1.0 - 2.0**-53, 1.0]))
-    lam = np.concatenate((sampling.sample_binned(dist.cdf, u), [250.0, 299.999, 800.0, 829.9999, 830.0, 100.0]))
-    sample_jit, pdf_jit, stratified_jit = (jit(f) for f in (sampling.sample_binned, sampling.pdf_binned,
-                                                             sampling.stratified_binned))
-    assert np.array_equal(sampling.sample_binned(dist.cdf, u), [sample_jit(dist.cdf, x) for x in u])
+    lam = np.concatenate((binned.sample_binned(dist.cdf, u), [250.0, 299.999, 800.0, 829.9999, 830.0, 100.0]))
+    sample_jit, pdf_jit, stratified_jit = (jit(f) for f in (binned.sample_binned, binned.pdf_binned,
+                                                           binned.stratified_binned))
+    assert np.array_equal(binned.sample_binned(dist.cdf, u), [sample_jit(dist.cdf, x) for x in u])
     pdfs = [pdf_jit(dist.bin_pdf, x) for x in lam]
-    assert np.array_equal(sampling.pdf_binned(dist.bin_pdf, lam), pdfs)
-    lams, pdfs = sampling.stratified_binned(dist.cdf, dist.bin_pdf, u, 4)
+    assert np.array_equal(binned.pdf_binned(dist.bin_pdf, lam), pdfs)
+    lams, pdfs = binned.stratified_binned(dist.cdf, dist.bin_pdf, u, 4)
     for k, x in enumerate(u):
         jit_lams, jit_pdfs = stratified_jit(dist.cdf, dist.bin_pdf, x, 4)
         assert np.array_equal(jit_lams, lams[:, k]) and np.array_equal(jit_pdfs, pdfs[:, k])

@@ -24,9 +24,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from ..binned import pdf_binned, sample_binned
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
-from ..sampling import pdf_binned, sample_binned
 from .layout import (
     LIGHT_ENVIRONMENT,
     LIGHT_SKY,

@@ -27,7 +27,7 @@ APP = "spectral_volume"
 CACHE_DIR_VARIABLE = "SPECTRAL_VOLUME_CACHE_DIR"
 TRACER = Path(__file__).resolve().parent.parent
 PACKAGE = __name__.rpartition(".kernels.")[0]  # "addon.tracer" or "bl_ext.<repo>.spectral_volume.addon.tracer"
-KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.py", "phase.py", "sampling.py",
+KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.py", "phase.py", "binned.py",
                   "planck.py", "shared_math.py", "wavelengths.py")
 COMPILE_SECONDS_FILE = "compile-seconds.txt"
 DEFAULT_COMPILE_SECONDS = 90.0  # until measured here: cold compiles took 60–105 s on a 2-core VM (bench/README.md)

@@ -19,9 +19,9 @@ which can send a path down another branch). Masked lanes may compute values that
 
 import numpy as np
 
+from ..binned import pdf_binned, sample_binned
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
-from ..sampling import pdf_binned, sample_binned
 from ..wavelengths import GRID, LAMBDA_MIN
 from .layout import (
     CAMERA_PERSPECTIVE as PERSPECTIVE,
