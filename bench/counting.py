@@ -20,7 +20,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from addon.tracer.compile import KernelScene
+from addon.tracer.kernels.layout import KernelScene
 
 from bench.kernel_copy import CopyRenderer, kernel_copy
 

@@ -32,7 +32,7 @@ import addon  # noqa: E402
 from addon.cycles_emulation.job import EmulationJob  # noqa: E402
 from addon.export.scene import export_scene  # noqa: E402
 from addon.tracer import colorimetry, grids  # noqa: E402
-from addon.tracer.compile import compile_scene  # noqa: E402
+from addon.tracer.lowering import compile_scene  # noqa: E402
 from addon.tracer.scene import Grid, look_at  # noqa: E402
 from bench.measure import machine, render_ours, warm_up  # noqa: E402
 from bench.scenes import EYE, SUN_DIRECTION, TARGET, cloud_density, cloud_transform  # noqa: E402

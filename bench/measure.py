@@ -18,8 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from addon.tracer import colorimetry
-from addon.tracer.compile import KernelScene, compile_scene
 from addon.tracer.film import Film
+from addon.tracer.kernels.layout import KernelScene
+from addon.tracer.lowering import compile_scene
 from addon.tracer.render import pass_sizes, render_unit
 from addon.tracer.scene import Scene
 

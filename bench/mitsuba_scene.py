@@ -30,7 +30,8 @@ import re
 
 import numpy as np
 
-from addon.tracer.compile import camera_extent, strength_scale
+from addon.tracer.lights import strength_scale
+from addon.tracer.lowering import camera_extent
 from addon.tracer.scene import Grid, Medium, Scene
 from addon.tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
 

@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from addon.tracer.compile import compile_scene
+from addon.tracer.lowering import compile_scene
 
 from bench import counting
 from bench.measure import PeakRSS, compile_timed, fmt_bytes, machine, render_ours, rss, warm_up

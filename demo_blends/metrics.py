@@ -12,7 +12,8 @@ Colour vocabulary: chromaticity (x, y); CIE LCh hue angle h (degrees, CIELAB aga
 import numpy as np
 
 from addon.tracer import colorimetry
-from addon.tracer.compile import camera_extent, strength_scale
+from addon.tracer.lights import strength_scale
+from addon.tracer.lowering import camera_extent
 from addon.tracer.scene import Camera, Grid, Light
 from addon.tracer.wavelengths import LAMBDA_STEP
 

@@ -36,9 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..tracer import colorimetry, phase, spectra
-from ..tracer.compile import default_band
 from ..tracer.errors import SpectralError
 from ..tracer.scene import Scene
+from ..tracer.wavelength_modes import default_band
 from ..tracer.wavelengths import GRID
 from . import bands as bandlib
 from . import parameters

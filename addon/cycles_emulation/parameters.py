@@ -6,7 +6,7 @@ the same material definition. In band k a medium has extinction ext_k, albedo_k(
 scattering coefficient over that of the extinction, per density level, so σ_s is preserved), anisotropy
 g_k, the fluorophore's excitation (absorption only: Cycles cannot re-emit at another wavelength) and
 its blackbody emission as a table over temperature. A
-light's colour in band k is the band mean of its spectrum scaled to strength 1 in its unit (`compile.strength_scale`),
+light's colour in band k is the band mean of its spectrum scaled to strength 1 in its unit (`lights.strength_scale`),
 its Cycles strength stays Blender's, so XYZ = Σ_k render_k · w_k (`bands.xyz_weights`, shaped within each
 band by the lights' spectra) matches the tracer.
 """
@@ -17,9 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..tracer import colorimetry, spectra
-from ..tracer.compile import default_band, strength_scale
 from ..tracer.errors import SpectralError
+from ..tracer.lights import strength_scale
 from ..tracer.scene import Light, Medium, Scene
+from ..tracer.wavelength_modes import default_band
 from ..tracer.wavelengths import GRID
 from . import bands as bandlib
 

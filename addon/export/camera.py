@@ -15,7 +15,7 @@ import math
 import numpy as np
 from mathutils import Matrix
 
-from ..tracer.compile import camera_extent
+from ..tracer.lowering import camera_extent
 from ..tracer.errors import SpectralError
 from ..tracer.scene import Camera
 

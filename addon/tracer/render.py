@@ -15,10 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import sampling
-from .compile import KernelScene, compile_scene, default_band, with_band
 from .errors import SpectralError
 from .film import Film
+from .kernels.layout import KernelScene
+from .lowering import compile_scene
 from .scene import BACKENDS, Scene
+from .wavelength_modes import default_band, with_band
 
 
 def backend_module(name: str):

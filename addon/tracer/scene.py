@@ -1,12 +1,12 @@
 """The in-memory scene: camera, media, lights and render settings as plain dataclasses.
 
 This is what the scene file (`scene_io`, docs/scene-format.md) loads into and what the add-on's
-exporter builds; the kernels never see it directly (`compile` lowers it to flat arrays).
+exporter builds; the kernels never see it directly (`lowering` lowers it to flat arrays).
 Conventions (DESIGN.md): lengths in Blender units, wavelengths in nm, matrices are 4×4 row-major
 NumPy arrays acting on column vectors (world = M @ [x, y, z, 1]).
 
 A scene checks itself, whoever built it: `Scene.validate()` (called by `scene_io.load_scene` and
-`save_scene` and by `compile.compile_scene`) raises a SpectralError naming the field by its scene-file
+`save_scene` and by `lowering.compile_scene`) raises a SpectralError naming the field by its scene-file
 path and in the file's units (`media[0].albedo: ...`, `camera.fov` in degrees). The enumerations of the
 format are defined here, once, except those the kernels switch on (kinds of camera and light, phase
 functions, wavelengths per path), which `kernels/layout.py` defines beside their codes.

@@ -68,7 +68,7 @@ def test_an_albedo_csv_above_one_is_refused_by_the_scene_rules(registered, tmp_p
     """The add-on's CSV albedo was never checked (issue 14): the exported scene now meets Scene.validate
     before it is rendered or saved."""
     from addon.export.scene import export_scene
-    from addon.tracer.compile import compile_scene
+    from addon.tracer.lowering import compile_scene
     from tests.addon.builders import basic_scene
 
     _scene, cloud = basic_scene(tmp_path)

@@ -9,7 +9,7 @@ from addon.export import camera as camera_export
 from addon.export.lights import point_intensity
 from addon.export.scene import export_scene
 from addon.tracer import grids, spectra
-from addon.tracer.compile import camera_extent
+from addon.tracer.lowering import camera_extent
 from addon.tracer.errors import SpectralError
 from addon.tracer.scene import Grid
 from addon.tracer.scene_io import load_scene

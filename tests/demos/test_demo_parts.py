@@ -4,7 +4,7 @@ metamer design, the absorbed-power integral and the display filter."""
 import numpy as np
 
 from addon.tracer import spectra
-from addon.tracer.compile import strength_scale
+from addon.tracer.lights import strength_scale
 from addon.tracer.scene import Fluorescence
 from demo_blends import display, metamers, metrics, scenes
 from tests.support.scenes import box_grid, medium

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from addon.tracer import colorimetry, spectra
-from addon.tracer.compile import compile_scene
+from addon.tracer.lowering import compile_scene
 from addon.tracer.film import Film
 from addon.tracer.kernels import numpy_backend
 from addon.tracer.render import band_scenes, render, render_unit

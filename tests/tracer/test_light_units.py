@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from addon.tracer import colorimetry, spectra
-from addon.tracer.compile import compile_scene
+from addon.tracer.lowering import compile_scene
 from addon.tracer.errors import SpectralError
 from addon.tracer.render import render
 from addon.tracer.scene import Light

@@ -417,7 +417,7 @@ def test_a_valid_scene_validates_to_itself():
 def test_one_validation_for_load_save_and_compile(tmp_path, case):
     """A Scene built in code is checked by the rules of the file format: compile and save refuse it (and save
     writes nothing), so nothing can write a scene file that load_scene refuses."""
-    from addon.tracer.compile import compile_scene
+    from addon.tracer.lowering import compile_scene
 
     change, words = INVALID_SCENES[case]
     scene = change(full_scene())

@@ -11,7 +11,7 @@ import pytest
 from addon.tracer import colorimetry, spectra
 from addon.tracer.planck import planck_radiance
 from addon.tracer.render import render, render_unit
-from addon.tracer.compile import compile_scene
+from addon.tracer.lowering import compile_scene
 from addon.tracer.errors import SpectralError
 from addon.tracer.scene import BlackbodyEmission, Fluorescence, Grid, Light
 from addon.tracer.wavelengths import GRID

@@ -1,19 +1,20 @@
 """Lowers a `Scene` to the flat arrays the kernels consume (`KernelScene`), for one wavelength band.
 
 Everything the integrator needs is precomputed here once per band: spectra tabulated on the grid,
-light spectra scaled to their strength, majorant grids, the hero-wavelength distribution and the
-XYZ weights. Both backends read the same `KernelScene`, so they cannot disagree about the scene.
+light spectra scaled to their strength and the lights' selection probabilities (`lights`), majorant
+grids, the hero-wavelength distribution (`wavelength_modes`) and the XYZ weights. Both backends read
+the same `KernelScene`, so they cannot disagree about the scene.
 """
 
 import numpy as np
 
 from . import colorimetry, sampling
 from .errors import SpectralError
-from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, LIGHT_SKY, PHASES, KernelScene
+from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, PHASES, KernelScene
+from .lights import selection_powers, strength_scale
 from .majorant import block_size_for, majorant_grid
-from .planck import planck_radiance
 from .scene import Grid, Light, Medium, Scene
-from .spectra import Spectrum
+from .wavelength_modes import default_band, with_band
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
 
@@ -99,44 +100,7 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
     return out
 
 
-def strength_scale(light: Light, spectrum: Spectrum | None = None, cmf: str = "cie1931") -> float:
-    """Factor turning a light's spectrum shape (default: `light.spectrum`; a sky's horizon too) into
-    radiometric units with `strength` in the light's unit: luminous, luminance Y = strength with the
-    colour matching functions `cmf`; radiant, ∫ spectrum dλ over the grid = strength (watts)."""
-    spectrum = spectrum or light.spectrum
-    if light.unit == "radiant":
-        total = spectrum.integral()
-    else:
-        total = float(colorimetry.spectrum_to_xyz(spectrum.values, cmf)[1])
-    if not total > 0:  # Scene.validate refuses these with the light's path
-        raise SpectralError(f"light {light.name or light.kind!r}: its spectrum has no {light.unit} part to scale")
-    return light.strength / total
-
-
-def _scene_centre_and_radius(media) -> tuple[np.ndarray, float]:
-    corners = []
-    for medium in media:
-        n = np.array(medium.density.values.shape, dtype=np.float64)
-        for corner in np.ndindex(2, 2, 2):
-            index = np.where(corner, n, -1.0)
-            corners.append((medium.density.index_to_world @ np.append(index, 1.0))[:3])
-    if not corners:
-        return np.zeros(3), 1.0
-    corners = np.array(corners)
-    centre = corners.mean(axis=0)
-    return centre, float(np.linalg.norm(corners - centre, axis=1).max())
-
-
-def _proxy_luminance(spd: np.ndarray, cmf: str) -> float:
-    """The light-choice proxy of a radiometric spectrum: its luminance Y, or, where more, that of an
-    equal-energy spectrum of the same radiant integral (so a light with no visible part, a UV lamp
-    that makes fluorescence, is still chosen)."""
-    equal_energy = np.trapezoid(spd, GRID) / (LAMBDA_MAX - LAMBDA_MIN)  # the constant-1 spectrum has Y = 1
-    return max(float(colorimetry.spectrum_to_xyz(spd, cmf)[1]), float(equal_energy))
-
-
-def _light_arrays(lights: tuple[Light, ...], media, cmf: str) -> dict:
-    centre, radius = _scene_centre_and_radius(media)
+def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str) -> dict:
     count = len(lights)
     out = {
         "light_kind": np.array([LIGHT_KINDS.index(light.kind) for light in lights], dtype=np.int64),
@@ -148,79 +112,25 @@ def _light_arrays(lights: tuple[Light, ...], media, cmf: str) -> dict:
         "light_cos": np.ones(count),
         "light_smooth": np.zeros(count),
     }
-    power = np.zeros(count)
     for index, light in enumerate(lights):
-        luminance = _proxy_luminance(out["light_spd"][index], cmf)
         if light.kind == "sun":
             out["light_dir"][index] = light.direction / np.linalg.norm(light.direction)
             out["light_cos"][index] = np.cos(0.5 * light.angle)
-            power[index] = luminance
-        elif light.kind in ("environment", "sky"):
-            power[index] = np.pi * luminance
-            if light.kind == "sky":
-                horizon = light.horizon_spectrum or light.spectrum
-                out["light_spd_horizon"][index] = horizon.values * strength_scale(light, horizon, cmf)
-        else:
+        elif light.kind == "sky":
+            horizon = light.horizon_spectrum or light.spectrum
+            out["light_spd_horizon"][index] = horizon.values * strength_scale(light, horizon, cmf)
+        elif light.kind in ("point", "spot"):
             out["light_pos"][index] = light.position
-            distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
-            power[index] = 4.0 * np.pi * luminance / distance**2
             if light.kind == "spot":
                 axis = np.asarray(light.spot_direction, dtype=np.float64)
                 out["light_dir"][index] = axis / np.linalg.norm(axis)
                 cos_half = np.cos(0.5 * light.spot_size)
                 out["light_cos"][index] = cos_half
                 out["light_smooth"][index] = (1.0 - cos_half) * light.spot_blend
+    power = selection_powers(lights, out["light_spd"], media, cmf)
     out["light_pmf"] = power / power.sum() if count else power
     out["light_power"] = power
     return out
-
-
-# Above this temperature a black body's shape over the grid is λ⁻⁴ (Rayleigh–Jeans) to 3e-4, so the
-# `light` mode follows this one's (hotter ones may overflow in double precision).
-BLACKBODY_SHAPE_MAX_KELVIN = 1e8
-# The `light` mode's share of the `colour` density: it keeps the pdf positive wherever any light (emission,
-# fluorescence, a sky's horizon, or a light outside the sources' spectra) can reach the camera.
-LIGHT_MODE_DEFENSIVE_SHARE = 0.2
-
-
-def light_mode_sources(kernel_scene: KernelScene) -> list[tuple[Spectrum, float]]:
-    """The spectra the `light` mode follows, as (spectrum, weight): each light's spectrum weighted by its
-    next-event selection probability (a sky's zenith and horizon spectra half each), then, with the lights
-    together weighing 1, each emitting medium's black body at its hottest temperature and each fluorophore's
-    emission spectrum weighing 1 each."""
-    ks = kernel_scene
-    sources = []
-    for kind, spd, horizon, pmf in zip(ks.light_kind, ks.light_spd, ks.light_spd_horizon, ks.light_pmf):
-        if kind == LIGHT_SKY:
-            sources += [(Spectrum(spd), 0.5 * pmf), (Spectrum(horizon), 0.5 * pmf)]
-        else:
-            sources.append((Spectrum(spd), pmf))
-    for m, offset in enumerate(ks.temperature_offset):
-        if offset >= 0:
-            size = int(np.prod(ks.temperature_shape[m]))
-            scale, shift, _ = ks.temperature_map[m]
-            hottest = scale * float(ks.temperature_data[offset:offset + size].max(initial=0.0)) + shift
-            if hottest > 0:
-                sources.append((Spectrum(planck_radiance(GRID, min(hottest, BLACKBODY_SHAPE_MAX_KELVIN))), 1.0))
-    sources += [(Spectrum(pdf), 1.0) for pdf in ks.emission_pdf if pdf.any()]
-    return sources
-
-
-def wavelength_distribution(mode: str, kernel_scene: KernelScene, lo: float, hi: float):
-    """The hero-wavelength distribution over [lo, hi] for a `wavelength_sampling` mode."""
-    if mode in ("uniform", "uv"):
-        return sampling.uniform(lo, hi)
-    if mode == "colour":
-        return sampling.colour_distribution(kernel_scene.xyz_weights, lo, hi)
-    if mode == "visible":
-        return sampling.visible_distribution(lo, hi)
-    if mode == "d65_rejection":
-        return sampling.d65(lo, hi)
-    if mode == "light":
-        return sampling.defensive_composite(light_mode_sources(kernel_scene),
-                                            sampling.colour_distribution(kernel_scene.xyz_weights, lo, hi),
-                                            LIGHT_MODE_DEFENSIVE_SHARE)
-    raise SpectralError(f"unknown wavelength sampling {mode!r}")
 
 
 def camera_extent(camera) -> np.ndarray:
@@ -235,15 +145,9 @@ def camera_extent(camera) -> np.ndarray:
     return np.array([extent_x, extent_y, camera.shift_x * span, camera.shift_y * span])
 
 
-def default_band(settings) -> tuple[float, float]:
-    """The wavelength range the camera samples: the settings' range, from 250 nm in "uv" mode."""
-    lo = LAMBDA_MIN if settings.wavelength_sampling == "uv" else settings.lambda_min
-    return lo, settings.lambda_max
-
-
 def compile_scene(scene: Scene) -> KernelScene:
     """The kernel data for the whole wavelength range of a valid scene (`Scene.validate`, called here);
-    `with_band` restricts it to one band."""
+    `wavelength_modes.with_band` restricts it to one band."""
     settings = scene.validate().settings
     media = _media_arrays(scene.media)
     lights = _light_arrays(scene.lights, scene.media, settings.cmf)
@@ -265,9 +169,3 @@ def compile_scene(scene: Scene) -> KernelScene:
     )
     return with_band(kernel_scene, settings.wavelength_sampling, *default_band(settings))
 
-
-def with_band(kernel_scene: KernelScene, mode: str, lo: float, hi: float) -> KernelScene:
-    """The same kernel data with the hero wavelength drawn from [lo, hi] by `mode`."""
-    distribution = wavelength_distribution(mode, kernel_scene, lo, hi)
-    return kernel_scene._replace(lambda_cdf=np.asarray(distribution.cdf, dtype=np.float64),
-                                 lambda_pdf=np.asarray(distribution.bin_pdf, dtype=np.float64))

@@ -1,0 +1,65 @@
+"""Light policies: what a light's `strength` means in its unit (`strength_scale`), and how often next-event
+estimation chooses each light (`selection_powers`, which the lowering normalises to `KernelScene.light_pmf`).
+"""
+
+import numpy as np
+
+from . import colorimetry
+from .errors import SpectralError
+from .scene import Light, Medium
+from .spectra import Spectrum
+from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
+
+
+def strength_scale(light: Light, spectrum: Spectrum | None = None, cmf: str = "cie1931") -> float:
+    """Factor turning a light's spectrum shape (default: `light.spectrum`; a sky's horizon too) into
+    radiometric units with `strength` in the light's unit: luminous, luminance Y = strength with the
+    colour matching functions `cmf`; radiant, ∫ spectrum dλ over the grid = strength (watts)."""
+    spectrum = spectrum or light.spectrum
+    if light.unit == "radiant":
+        total = spectrum.integral()
+    else:
+        total = float(colorimetry.spectrum_to_xyz(spectrum.values, cmf)[1])
+    if not total > 0:  # Scene.validate refuses these with the light's path
+        raise SpectralError(f"light {light.name or light.kind!r}: its spectrum has no {light.unit} part to scale")
+    return light.strength / total
+
+
+def proxy_luminance(spd: np.ndarray, cmf: str) -> float:
+    """The light-choice proxy of a radiometric spectrum: its luminance Y, or, where more, that of an
+    equal-energy spectrum of the same radiant integral (so a light with no visible part, a UV lamp
+    that makes fluorescence, is still chosen)."""
+    equal_energy = np.trapezoid(spd, GRID) / (LAMBDA_MAX - LAMBDA_MIN)  # the constant-1 spectrum has Y = 1
+    return max(float(colorimetry.spectrum_to_xyz(spd, cmf)[1]), float(equal_energy))
+
+
+def _scene_centre_and_radius(media: tuple[Medium, ...]) -> tuple[np.ndarray, float]:
+    corners = []
+    for medium in media:
+        n = np.array(medium.density.values.shape, dtype=np.float64)
+        for corner in np.ndindex(2, 2, 2):
+            index = np.where(corner, n, -1.0)
+            corners.append((medium.density.index_to_world @ np.append(index, 1.0))[:3])
+    if not corners:
+        return np.zeros(3), 1.0
+    corners = np.array(corners)
+    centre = corners.mean(axis=0)
+    return centre, float(np.linalg.norm(corners - centre, axis=1).max())
+
+
+def selection_powers(lights: tuple[Light, ...], spds: np.ndarray, media: tuple[Medium, ...], cmf: str) -> np.ndarray:
+    """The power each light is chosen in proportion to, from its radiometric spectrum `spds[i]`: the proxy
+    luminance for a sun, π times it for an environment or sky, and 4π times it over the squared distance
+    to the media's centre (at least their bounding radius) for a point or spot light."""
+    centre, radius = _scene_centre_and_radius(media)
+    power = np.zeros(len(lights))
+    for index, (light, spd) in enumerate(zip(lights, spds)):
+        luminance = proxy_luminance(spd, cmf)
+        if light.kind == "sun":
+            power[index] = luminance
+        elif light.kind in ("environment", "sky"):
+            power[index] = np.pi * luminance
+        else:
+            distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
+            power[index] = 4.0 * np.pi * luminance / distance**2
+    return power
