@@ -2,14 +2,21 @@
 ready while asking for cancellation. A tiny function stands in for the kernel (which takes minutes to
 compile)."""
 
+import ast
+import inspect
 import pickle
+import shutil
 import threading
+from pathlib import Path
 
 import numba
 import pytest
 from numba import njit
 
 from addon.tracer.kernels import numba_cache
+from addon.tracer.kernels.layout import KernelScene
+
+TRACER = numba_cache.TRACER
 
 
 def add_one(x):
@@ -50,6 +57,53 @@ def test_the_package_and_the_sources_key_the_folder(monkeypatch, tmp_path):
     as_extension = numba_cache.kernel_folder(tmp_path)
     monkeypatch.setattr(numba_cache, "sources_digest", lambda: "edited")
     assert len({here, as_extension, numba_cache.kernel_folder(tmp_path)}) == 3
+
+
+def _keyed() -> set[str]:
+    """The files the kernel cache's key hashes, relative to the tracer package."""
+    return {path.relative_to(TRACER).as_posix()
+            for pattern in numba_cache.KERNEL_SOURCES for path in TRACER.glob(pattern)}
+
+
+def _imported(module: Path) -> set[str]:
+    """`module` and the tracer's modules it imports (relative imports), directly or through others."""
+    seen, todo = set(), [module]
+    while todo:
+        path = todo.pop()
+        if path.relative_to(TRACER).as_posix() in seen:
+            continue
+        seen.add(path.relative_to(TRACER).as_posix())
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level:
+                base = path.parents[node.level - 1].joinpath(*(node.module or "").split("."))
+                candidates = [base.with_suffix(".py")] + [base / f"{alias.name}.py" for alias in node.names]
+                todo += [candidate for candidate in candidates if candidate.is_file()]
+    return seen
+
+
+def test_the_key_hashes_exactly_the_modules_the_kernel_compiles_in():
+    """Every module the Numba kernel imports, directly or not, may put code or constants into the compiled
+    kernel, so its edits must change the key; any other module (the lowering, the light and wavelength
+    policies) must not, or editing it recompiles the kernel for every user. `numba_cache` only says where
+    the kernel is kept. Numba keys a cached kernel by the class of its KernelScene argument and its fields'
+    types, not their names, so KernelScene's module is hashed too."""
+    kernel_imports = _imported(TRACER / "kernels" / "numba_backend.py") - {"kernels/numba_cache.py"}
+    assert kernel_imports == _keyed()
+    assert Path(inspect.getsourcefile(KernelScene)).relative_to(TRACER).as_posix() in _keyed()
+
+
+def test_editing_the_lowering_or_a_policy_keeps_the_compiled_kernel(monkeypatch, tmp_path):
+    copy = tmp_path / "tracer"
+    shutil.copytree(TRACER, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(numba_cache, "TRACER", copy)
+    before = numba_cache.sources_digest()
+    for module in ("lowering.py", "lights.py", "wavelength_modes.py", "sampling.py", "scene.py"):
+        with (copy / module).open("a") as source:
+            source.write("# edited\n")
+    assert numba_cache.sources_digest() == before
+    with (copy / "kernels" / "layout.py").open("a") as source:
+        source.write("# edited\n")
+    assert numba_cache.sources_digest() != before
 
 
 def test_the_cpu_compiled_for_keys_the_folder(monkeypatch, tmp_path):
