@@ -168,4 +168,3 @@ def compile_scene(scene: Scene) -> KernelScene:
         rr_depth=int(settings.rr_depth),
     )
     return with_band(kernel_scene, settings.wavelength_sampling, *default_band(settings))
-

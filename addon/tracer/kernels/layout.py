@@ -3,9 +3,9 @@ constants the kernels are compiled with.
 
 The enumerations of the scene format that the kernels switch on are defined here (`scene` imports them):
 a name's code in the kernels is its index in its tuple. This module is part of the kernel cache's key
-(`numba_cache.KERNEL_SOURCES`), so it holds only what the compiled kernel depends on, and imports nothing
-from the tracer: what a scene lowers to (`lowering`) and how lights and wavelengths are chosen can change
-without recompiling the kernel.
+(`numba_cache.KERNEL_SOURCES`), so it holds only what the compiled kernel depends on and imports nothing
+from the tracer: the lowering (`lowering`) and the light and wavelength policies (`lights`,
+`wavelength_modes`) change without recompiling the kernel.
 """
 
 from typing import NamedTuple
