@@ -71,15 +71,15 @@ def open_scene(blend: Path, scene_name: str | None = None):
 
 
 def export_context_scene(frame: int | None = None):
-    """Export the context's scene (at `frame`, default its current frame) to a tracer scene."""
+    """Export the context's scene (at `frame`, default its current frame) to a tracer scene, as F12 renders it."""
     import bpy
 
-    from .export.scene import export_scene
+    from .render_export import export_rendered
 
     if frame is not None:
         check_frame(frame)
         bpy.context.scene.frame_set(frame)
-    return export_scene(bpy.context.evaluated_depsgraph_get())
+    return export_rendered(bpy.context.scene, bpy.context.view_layer)
 
 
 def check_frame(frame: int) -> int:

@@ -8,7 +8,8 @@ at the end the XYZ and XYZ Variance passes, which the compositor and multilayer 
 written too. While the kernel compiles (the first render), the stats line says so. Bad input is
 reported as an error and renders nothing, so Blender writes no output file. With the Cycles emulation
 chosen as renderer, F12 reports an error instead: Cycles cannot render from inside another engine's
-render (Blender crashes).
+render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
+CLI), a render exports its depsgraph for it and renders nothing.
 
 While it is the engine, those of Blender's generic panels (offered for every engine) that change what it
 renders stay visible: camera, lights, volume file and grids, mesh data, output and colour management,
@@ -22,7 +23,7 @@ import time
 
 import bpy
 
-from . import dispatch
+from . import dispatch, render_export
 from .export.scene import export_scene
 from .pixels import blender_rows, with_alpha
 from .props.render import ENGINE_ID
@@ -47,6 +48,8 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             self.register_pass(scene, renderlayer, name, len(channels), channels, "COLOR")
 
     def render(self, depsgraph):
+        if render_export.capture(depsgraph):  # Render to Image, Export Scene, the CLI: export only
+            return
         if depsgraph.scene.original.spectral.renderer == "CYCLES":
             self.report({"ERROR"}, "the Cycles emulation cannot run inside a render engine's render: use Render to "
                         "Image (Spectral sidebar tab) or the command line, or choose the Tracer renderer")

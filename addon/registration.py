@@ -8,6 +8,7 @@ so adding a class means adding it to its module's list, nowhere else.
 import bpy
 
 from . import cli, curves, engine
+from .operators import albedo_levels
 from .operators import emulation as emulation_operators
 from .operators import export as export_operators
 from .operators import import_scene as import_operators
@@ -15,11 +16,11 @@ from .operators import presets as preset_operators
 from .operators import render_image
 from .operators import spectrum as spectrum_operators
 from .props import attach, light, material, render, spectrum
-from .ui import lighting, material as material_ui, menus, render as render_ui, sidebar
+from .ui import lighting, material as material_ui, presets as preset_ui, render as render_ui, sidebar
 
 MODULES = (curves, spectrum, material, light, render, attach, engine, spectrum_operators, preset_operators,
-           export_operators, import_operators, emulation_operators, render_image, menus, material_ui, lighting,
-           render_ui, sidebar, cli)
+           albedo_levels, export_operators, import_operators, emulation_operators, render_image, preset_ui,
+           material_ui, lighting, render_ui, sidebar, cli)
 
 
 def register():

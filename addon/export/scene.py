@@ -13,8 +13,9 @@ render's own depsgraph never writes them back to the original data), and the ins
 Geometry Nodes volumes (Mesh to Volume, Volume Cube, ...) and instanced collections, each at its
 instance matrix. Nothing is written to disk here and the Blender data is not changed.
 
-Setting an add-on property does not tag its data block for re-evaluation, so a viewport depsgraph (Render
-to Image, the CLI, scripts) may hold stale copies of the materials, lights, worlds and scene: those are
+The add-on exports render depsgraphs (F12, and `addon.render_export` for everything else); scripts may pass
+a viewport one. Setting an add-on property does not tag its data block for re-evaluation, so a viewport
+depsgraph may hold stale copies of the materials, lights, worlds and scene: those are
 tagged and re-evaluated first. A render's depsgraph is built fresh and needs none of this. Objects are not
 tagged (that would re-run their modifiers and simulations): their settings, the density grid's name and the
 voxel size, are read from the original objects.

@@ -1,1 +1,1 @@
-"""Operators of the add-on: export, render, Cycles emulation, presets, spectrum import."""
+"""Operators of the add-on: export, render, Cycles emulation, presets, albedo levels, spectrum import."""

@@ -4,7 +4,7 @@ their estimated colour error, shown in the Render settings (`band_plan`; nothing
 import bpy
 
 from ..cycles_emulation.band_plan import plan_bands
-from ..export.scene import export_scene
+from ..render_export import export_rendered
 from ..tracer.errors import SpectralError
 
 # Scene name → the last estimate's summary, for the panel (not saved with the file: it describes the
@@ -21,7 +21,7 @@ class SPECTRAL_OT_estimate_emulation_bands(bpy.types.Operator):
     def execute(self, context):
         settings = context.scene.spectral
         try:
-            export = export_scene(context.evaluated_depsgraph_get())
+            export = export_rendered(context.scene, context.view_layer)
             plan = plan_bands(export.scene, max_renders=settings.emulation_max_renders)
         except SpectralError as problem:
             self.report({"ERROR"}, f"No estimate: {problem}")

@@ -5,7 +5,7 @@ from pathlib import Path
 import bpy
 from bpy_extras.io_utils import ExportHelper
 
-from ..export.scene import export_scene
+from ..render_export import export_rendered
 from ..tracer.errors import SpectralError
 from ..tracer.scene_io import SCENE_FILE, save_scene
 
@@ -26,7 +26,7 @@ class SPECTRAL_OT_export_scene(bpy.types.Operator, ExportHelper):
 
     def execute(self, context):
         try:
-            result = export_scene(context.evaluated_depsgraph_get())
+            result = export_rendered(context.scene, context.view_layer)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Nothing exported: {problem}")
             return {"CANCELLED"}

@@ -1,94 +1,75 @@
-"""Operators that apply a light-spectrum or material preset, and add or remove albedo levels."""
+"""Add and remove the user's own light-spectrum and material presets (Blender's AddPresetBase, as Cycles'
+sampling presets). Blender's `script.execute_preset` applies a preset; what a preset stores and how it is
+written is `addon.presets`. Built-in presets cannot be removed."""
+
+import os
+from pathlib import Path
 
 import bpy
+from bl_operators.presets import AddPresetBase
 
-from .. import curves, presets
-from .targets import TargetProperties, resolve
-
-
-def _items(table):
-    return [(key, label, f"Apply the {label} preset") for key, (label, _values) in table.items()]
+from .. import presets
+from ..tracer.errors import SpectralError
 
 
-class SPECTRAL_OT_apply_light_preset(TargetProperties, bpy.types.Operator):
-    """Set this light spectrum from a preset"""
+class AddSpectralPreset(AddPresetBase):
+    """The shared part: subclasses name the settings (`target`), the line that finds them when the preset
+    runs (`define`), and what they are (`what`)."""
 
-    bl_idname = "spectral.apply_light_preset"
-    bl_label = "Apply Light Preset"
-    bl_options = {"REGISTER", "UNDO"}
+    define = ""
+    what = ""
 
-    preset: bpy.props.EnumProperty(name="Preset", description="The light spectrum to apply",
-                                   items=_items(presets.LIGHT_PRESETS))
+    @staticmethod
+    def target(context):
+        raise NotImplementedError
 
     def execute(self, context):
-        settings = resolve(self)
-        if settings is None:
-            self.report({"ERROR"}, "The light spectrum no longer exists")
+        adding = not (self.remove_name or self.remove_active)
+        if adding and self.target(context) is None:
+            self.report({"ERROR"}, f"No {self.what} here to save as a preset")
             return {"CANCELLED"}
-        presets.apply(settings, presets.LIGHT_PRESETS[self.preset][1])
-        return {"FINISHED"}
+        return super().execute(context)
+
+    def add(self, context, filepath):
+        note = f"Spectral Volume {self.what} preset: it sets every setting listed here"
+        presets.write(filepath, self.target(context), self.define, note)
+
+    def remove(self, context, filepath):
+        if Path(filepath).resolve().is_relative_to(presets.BUILT_IN.resolve()):
+            raise SpectralError(f"{bpy.path.display_name(Path(filepath).stem)!r} is a built-in preset: "
+                                "it cannot be removed")
+        os.remove(filepath)
 
 
-class SPECTRAL_OT_apply_material_preset(bpy.types.Operator):
-    """Set the active material's spectral volume settings from a preset"""
+class SPECTRAL_OT_light_preset_add(AddSpectralPreset, bpy.types.Operator):
+    """Save this light spectrum as a preset, or remove one of yours (the wavelength window is not saved)"""
 
-    bl_idname = "spectral.apply_material_preset"
-    bl_label = "Apply Material Preset"
-    bl_options = {"REGISTER", "UNDO"}
+    bl_idname = "spectral.light_preset_add"
+    bl_label = "Add Light Spectrum Preset"
+    preset_menu = "SPECTRAL_PT_light_presets"
+    preset_subdir = presets.LIGHT_SUBDIR
+    define = "spectrum = bpy.context.spectral_spectrum"
+    what = "light spectrum"
 
-    preset: bpy.props.EnumProperty(name="Preset", description="The volume material to apply",
-                                   items=_items(presets.MATERIAL_PRESETS))
-
-    @classmethod
-    def poll(cls, context):
-        return getattr(context, "material", None) is not None
-
-    def execute(self, context):
-        settings = context.material.spectral
-        presets.apply(settings, presets.MATERIAL_PRESETS[self.preset][1])
-        settings.enabled = True
-        return {"FINISHED"}
+    @staticmethod
+    def target(context):
+        return getattr(context, "spectral_spectrum", None)
 
 
-class SPECTRAL_OT_albedo_level_add(bpy.types.Operator):
-    """Add an albedo spectrum at a higher density"""
+class SPECTRAL_OT_material_preset_add(AddSpectralPreset, bpy.types.Operator):
+    """Save this material's spectral volume settings as a preset, or remove one of yours"""
 
-    bl_idname = "spectral.albedo_level_add"
-    bl_label = "Add Albedo Level"
-    bl_options = {"REGISTER", "UNDO"}
+    bl_idname = "spectral.material_preset_add"
+    bl_label = "Add Spectral Material Preset"
+    preset_menu = "SPECTRAL_PT_material_presets"
+    preset_subdir = presets.MATERIAL_SUBDIR
+    define = "settings = bpy.context.material.spectral"
+    what = "material"
 
-    @classmethod
-    def poll(cls, context):
-        return getattr(context, "material", None) is not None
-
-    def execute(self, context):
-        settings = context.material.spectral
-        highest = max((level.density for level in settings.albedo_levels), default=0.0)
-        level = settings.albedo_levels.add()
-        level.density = highest + 1.0
-        settings.albedo_index = len(settings.albedo_levels) - 1
-        return {"FINISHED"}
-
-
-class SPECTRAL_OT_albedo_level_remove(bpy.types.Operator):
-    """Remove the active albedo level"""
-
-    bl_idname = "spectral.albedo_level_remove"
-    bl_label = "Remove Albedo Level"
-    bl_options = {"REGISTER", "UNDO"}
-
-    @classmethod
-    def poll(cls, context):
+    @staticmethod
+    def target(context):
         material = getattr(context, "material", None)
-        return material is not None and len(material.spectral.albedo_levels) > 0
-
-    def execute(self, context):
-        settings = context.material.spectral
-        curves.discard(settings.albedo_levels[settings.albedo_index].spectrum.curve)
-        settings.albedo_levels.remove(settings.albedo_index)
-        settings.albedo_index = max(0, min(settings.albedo_index, len(settings.albedo_levels) - 1))
-        return {"FINISHED"}
+        return None if material is None else material.spectral
 
 
-CLASSES = (SPECTRAL_OT_apply_light_preset, SPECTRAL_OT_apply_material_preset, SPECTRAL_OT_albedo_level_add,
-           SPECTRAL_OT_albedo_level_remove)
+CLASSES = (SPECTRAL_OT_light_preset_add, SPECTRAL_OT_material_preset_add)

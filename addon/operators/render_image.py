@@ -10,8 +10,8 @@ failed one leaves the image and the file as they were.
 import bpy
 
 from ..cycles_emulation.job import EmulationJob, emulation_job
-from ..export.scene import export_scene
 from ..image_output import placement, write_outputs
+from ..render_export import export_rendered
 from ..render_job import RenderJob
 from ..tracer.errors import SpectralError
 
@@ -40,7 +40,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     def _start(self, context) -> RenderJob | EmulationJob | None:
         settings = context.scene.spectral
         try:
-            export = export_scene(context.evaluated_depsgraph_get())
+            export = export_rendered(context.scene, context.view_layer)
             self._region = placement(context.scene)
             job = (emulation_job(context.scene, export) if settings.renderer == "CYCLES"
                    else RenderJob(export.scene, settings.scheduler_address))

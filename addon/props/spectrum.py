@@ -91,6 +91,12 @@ class SpectrumFields:
     preview: bpy.props.FloatVectorProperty(name="Preview", description="Color of this spectrum",
                                            subtype="COLOR", size=3, get=_preview)
 
+    def set_curve_points(self, points) -> None:
+        """Make this spectrum's curve run through `points`, (nm, value) pairs (presets store curves so)."""
+        if len(points) < 2:
+            raise ValueError(f"a spectrum curve needs at least two (nm, value) points, got {len(points)}")
+        curves.set_points(curves.ensure(self.curve, self.Y_RANGE), *zip(*points))
+
 
 class SpectralLightSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     """The shape of a light's spectrum; its brightness is the light's own Power or Strength."""

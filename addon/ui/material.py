@@ -3,6 +3,7 @@
 import bpy
 
 from .panel import SpectralPanel
+from .presets import SPECTRAL_PT_material_presets
 from .spectrum import draw_spectrum
 
 
@@ -12,7 +13,6 @@ def draw_material_main(layout, material) -> None:
     row = layout.row(align=True)
     row.use_property_split = False
     row.prop(settings, "enabled")
-    row.menu("SPECTRAL_MT_material_presets", text="Presets", icon="PRESET")
     body = layout.column()
     body.active = settings.enabled
     body.prop(settings, "density_scale")
@@ -79,6 +79,9 @@ class MaterialPanel(SpectralPanel):
 class SPECTRAL_PT_material(MaterialPanel, bpy.types.Panel):
     bl_label = "Spectral Volume"
     bl_idname = "SPECTRAL_PT_material"
+
+    def draw_header_preset(self, context):
+        SPECTRAL_PT_material_presets.draw_panel_header(self.layout)
 
     def draw_settings(self, layout, context):
         draw_material_main(layout, context.material)

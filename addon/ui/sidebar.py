@@ -5,6 +5,7 @@ import bpy
 from .lighting import draw_light, draw_world
 from .material import draw_material_main
 from .panel import SpectralPanel
+from .presets import SPECTRAL_PT_material_presets
 
 
 class SidebarPanel(SpectralPanel):
@@ -26,14 +27,24 @@ class SPECTRAL_PT_sidebar(SidebarPanel, bpy.types.Panel):
         layout.prop(scene.spectral, "wavelength_sampling")
 
 
+def _active_material(context):
+    obj = context.active_object
+    return obj.active_material if obj is not None else None
+
+
 class SPECTRAL_PT_sidebar_volume(SidebarPanel, bpy.types.Panel):
     bl_label = "Volume"
     bl_idname = "SPECTRAL_PT_sidebar_volume"
     bl_parent_id = "SPECTRAL_PT_sidebar"
 
+    def draw_header_preset(self, context):
+        material = _active_material(context)
+        if material is not None:
+            self.layout.context_pointer_set("material", material)  # the presets' target, as in Properties
+            SPECTRAL_PT_material_presets.draw_panel_header(self.layout)
+
     def draw_settings(self, layout, context):
-        obj = context.active_object
-        material = obj.active_material if obj is not None else None
+        material = _active_material(context)
         if material is None:
             layout.label(text="Select an object with a material", icon="INFO")
             return

@@ -6,7 +6,7 @@ from .. import curves
 from ..export.spectra import problem
 from ..operators.targets import point_at
 
-LIGHT_PRESETS_MENU = "SPECTRAL_MT_light_presets"
+LIGHT_PRESETS = "SPECTRAL_PT_light_presets"
 
 
 def draw_spectrum(layout, settings, text: str, presets: bool = False) -> None:
@@ -19,8 +19,8 @@ def draw_spectrum(layout, settings, text: str, presets: bool = False) -> None:
         header.prop(settings, "preview", text="")
     header.prop(settings, "source", text="")
     if presets:
-        header.context_pointer_set("spectral_spectrum", settings)
-        header.menu(LIGHT_PRESETS_MENU, text="", icon="PRESET")
+        header.context_pointer_set("spectral_spectrum", settings)  # what the presets apply to and save
+        header.popover(panel=LIGHT_PRESETS, text="", icon="PRESET")
     _draw_source(column, settings)
     if settings.source != "CURVE":
         point_at(column.operator("spectral.spectrum_to_curve", icon="FCURVE"), settings)

@@ -63,6 +63,9 @@ class RecordingLayout:
             return OperatorButton(args[0])
         elif name == "menu":
             assert hasattr(bpy.types, args[0]), f"menu {args[0]} is not registered"
+        elif name == "popover":
+            panel = kwargs.get("panel", args[0] if args else None)
+            assert hasattr(bpy.types, panel), f"popover panel {panel} is not registered"
         elif name == "template_list":
             assert hasattr(bpy.types, args[0]), f"UI list {args[0]} is not registered"
             _check_property(args[2], args[3])

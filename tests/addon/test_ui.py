@@ -1,4 +1,4 @@
-"""Panels, menus and UI lists draw against real data; presets and spectrum operators work."""
+"""Panels, menus and UI lists draw against real data; spectrum operators work."""
 
 import os
 import warnings
@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from addon import curves, presets, registration
+from addon import curves, registration
 from addon.export.spectra import to_spectrum
 from addon.props.render import ENGINE_ID
 from addon.tracer.errors import SpectralError
@@ -58,8 +58,9 @@ def test_every_panel_draws_for_every_object(registered):
             if hasattr(panel, "poll") and not panel.poll(context):
                 continue
             draw(panel, context)
-            if hasattr(panel, "draw_header"):
-                draw(panel, context, "draw_header")
+            for method in ("draw_header", "draw_header_preset"):
+                if hasattr(panel, method):
+                    draw(panel, context, method)
 
 
 def test_properties_panels_show_with_the_spectral_engine_only(registered):
@@ -99,7 +100,7 @@ def test_light_spectrum_shows_presets_and_swatch(registered):
     scene, _volume, _material, lights = _scene_with_everything()
     sun = lights[0]
     layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, sun))
-    assert ("menu", ("SPECTRAL_MT_light_presets",), {"text": "", "icon": "PRESET"}) in layout.calls
+    assert ("popover", (), {"panel": "SPECTRAL_PT_light_presets", "text": "", "icon": "PRESET"}) in layout.calls
     assert any(name == "prop" and args[1] == "preview" for name, args, _k in layout.calls)
     area = lights[3]
     layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, area))
@@ -117,40 +118,11 @@ def test_light_size_is_drawn_sun_angle_and_greyed_radius(registered):
         assert any("only the Cycles emulation uses the Radius" in text for text in layout.texts())
 
 
-def test_menus_and_ui_list_draw(registered):
+def test_ui_list_draws(registered):
     scene, volume, material, lights = _scene_with_everything()
-    context = SimpleNamespace(spectral_spectrum=lights[0].data.spectral.spectrum)
-    layout = draw(bpy.types.SPECTRAL_MT_light_presets, context)
-    assert len([c for c in layout.calls if c[0] == "operator"]) == len(presets.LIGHT_PRESETS)
-    draw(bpy.types.SPECTRAL_MT_material_presets, SimpleNamespace())
     level = material.spectral.albedo_levels[0]
     bpy.types.SPECTRAL_UL_albedo_levels.draw_item(None, None, RecordingLayout(), material.spectral, level, 0,
                                                    material.spectral, "albedo_index")
-
-
-def test_material_preset_sets_everything_and_resets_the_rest(registered):
-    material = bpy.data.materials.new("Dye")
-    material.spectral.use_blackbody = True
-    material.spectral.albedo.source = "COLOR"
-    with bpy.context.temp_override(material=material):
-        assert bpy.ops.spectral.apply_material_preset(preset="FLUORESCEIN") == {"FINISHED"}
-    settings = material.spectral
-    assert settings.enabled and settings.use_fluorescence and not settings.use_blackbody
-    assert settings.albedo.source == "CONSTANT" and settings.albedo.value == pytest.approx(0.95)
-    assert settings.emission.peak == pytest.approx(515.0) and settings.quantum_yield == pytest.approx(0.93)
-    with bpy.context.temp_override(material=material):
-        bpy.ops.spectral.apply_material_preset(preset="HAZE")
-    assert settings.phase == "rayleigh" and settings.extinction.source == "CURVE"
-    assert curves.points(curves.find_mapping(settings.extinction.curve))[0] == pytest.approx((360.0, 1.0))
-
-
-def test_light_preset_keeps_the_wavelength_window(registered):
-    spectrum = bpy.data.lights.new("UV Lamp", "SPOT").spectral.spectrum
-    spectrum.use_window, spectrum.window_min, spectrum.window_max = True, 275.0, 450.0
-    spectrum.source = "BLACKBODY"
-    presets.apply(spectrum, presets.LIGHT_PRESETS["TUNGSTEN"][1])
-    assert (spectrum.source, spectrum.illuminant, spectrum.temperature) == ("ILLUMINANT", "A", 5500.0)
-    assert spectrum.use_window and (spectrum.window_min, spectrum.window_max) == (275.0, 450.0)
 
 
 def test_spectrum_files_may_be_blend_relative(registered, tmp_path):
@@ -168,12 +140,6 @@ def test_spectrum_files_may_be_blend_relative(registered, tmp_path):
 def _target(settings):
     owner = settings.id_data
     return {"id_type": owner.id_type, "id_name": owner.name, "data_path": settings.path_from_id()}
-
-
-def test_light_preset_operator(registered):
-    spectrum = bpy.data.lights.new("Lamp", "POINT").spectral.spectrum
-    assert bpy.ops.spectral.apply_light_preset(preset="CANDLE", **_target(spectrum)) == {"FINISHED"}
-    assert spectrum.source == "BLACKBODY" and spectrum.temperature == pytest.approx(1900.0)
 
 
 def test_import_csv_accepts_a_good_file(registered, tmp_path):
@@ -304,10 +270,12 @@ def test_redraws_never_recover_spectra_from_colours(registered, monkeypatch):
 
 
 def test_panels_follow_blender_layout_and_show_under_this_engine_only(registered):
+    from bl_ui.utils import PresetPanel
+
     from addon.ui.panel import SpectralPanel
 
     scene, volume, material, lights = _scene_with_everything()
-    panels = _classes(bpy.types.Panel)
+    panels = [panel for panel in _classes(bpy.types.Panel) if not issubclass(panel, PresetPanel)]  # popovers
     assert all(issubclass(panel, SpectralPanel) and panel.COMPAT_ENGINES == {ENGINE_ID} for panel in panels)
     for obj in (volume, lights[0]):
         context = _context(scene, obj, material if obj is volume else None)

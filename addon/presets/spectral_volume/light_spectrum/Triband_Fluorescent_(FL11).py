@@ -1,0 +1,14 @@
+import bpy
+# Spectral Volume light spectrum preset: it sets every setting listed here
+spectrum = bpy.context.spectral_spectrum
+
+spectrum.source = 'ILLUMINANT'
+spectrum.illuminant = 'FL11'
+spectrum.temperature = 5500.0
+spectrum.band = 'UV365'
+spectrum.peak = 520.0
+spectrum.width = 20.0
+spectrum.color = (0.8, 0.8, 0.8)
+spectrum.rgb_method = 'jakob2019'
+spectrum.filepath = ''
+spectrum.units = 'nm'
