@@ -20,9 +20,9 @@ Conversion facts (each checked by `vs_mitsuba.py --check`, which renders both an
   the `regular` spectrum of our values, majorant scale · max(grid) · max(spectrum) as in
   `heterogeneous`, with `has_spectral_extinction` true. Dr.Jit traces its Python methods into the same
   kernel as a built-in medium's (on the grey cloud, 48×48, under volpathmis: the same image mean as
-  `heterogeneous` and the same time within 2%). `integrator_for` names the integrator that fits: `volpathmis` (spectral MIS, which
-  Mitsuba's documentation recommends for spectrally varying extinction) when a medium's extinction
-  varies, `volpath` otherwise.
+  `heterogeneous` and the same time within 2%). `integrator_for` names the integrator that fits:
+  `volpathmis` (spectral MIS, which Mitsuba's documentation recommends for spectrally varying
+  extinction) when a medium's extinction varies, `volpath` otherwise.
 - Lights: our sun's radiometric spectrum (shape scaled so that its luminance Y = strength) is the
   spectral irradiance on a plane facing it, which is what Mitsuba's `directional` `irradiance` is; our
   direction points towards the sun, Mitsuba's along the light's travel (so it is negated). Our
