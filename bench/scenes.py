@@ -4,8 +4,9 @@ One family of scenes (issue 3, Performance): the procedural heterogeneous cloud 
 `addon.tracer.procedural.cloud_grid` (edge 2 world units, at the origin), single-scattering albedo 0.8,
 Henyey–Greenstein anisotropy g, lit by a D65 sun and a constant equal-energy environment, seen by a 40°
 perspective camera. The sun is a delta light (angle 0) so that Mitsuba's `directional` emitter is the
-same light. `chromatic=True` makes extinction, albedo and anisotropy vary with wavelength (the seminar
-report's Rayleigh-like setting: g rising towards the red), for the colour benchmark.
+same light. `grid="sphere"` swaps the cloud for a smooth soft sphere (optical depth about 8 through its
+centre). Extinction, albedo and anisotropy can each vary with wavelength (`CHROMATIC` sets all three:
+the seminar report's Rayleigh-like setting, g rising towards the red, for the colour benchmark).
 
 Grids of 256³ and more take minutes and gigabytes of temporaries to generate, so `cloud_density` keeps
 every grid it made as a .npy file in a cache folder (default out/bench-cache/, ignored by git).
@@ -43,14 +44,24 @@ class CloudSpec:
     fov_degrees: float = 40.0
     sun_strength: float = 3.0  # irradiance luminance Y on a plane facing the sun
     environment_strength: float = 0.5  # radiance luminance Y
-    chromatic: bool = False
+    grid: str = "cloud"  # "cloud": procedural.cloud_grid; "sphere": sphere_density
+    extinction_varies: bool = False  # extinction 1.4 → 0.7 from 380 to 700 nm instead of 1
+    albedo_varies: bool = False  # albedo 0.6 → 0.95 instead of `albedo`
+    g_varies: bool = False  # g 0 → 0.8 instead of `g`
 
     def label(self) -> str:
-        kind = "chromatic" if self.chromatic else f"g={self.g:g}"
-        return f"cloud {self.resolution}³ {kind} {self.width}×{self.height}"
+        varying = [name for name, flag in (("extinction", self.extinction_varies), ("albedo", self.albedo_varies),
+                                           ("g", self.g_varies)) if flag]
+        g = "" if self.g_varies else f" g={self.g:g}"
+        spectral = f" varying {'+'.join(varying)}" if varying else ""
+        return f"{self.grid} {self.resolution}³{g}{spectral} {self.width}×{self.height}"
 
     def with_(self, **changes) -> "CloudSpec":
         return replace(self, **changes)
+
+
+CHROMATIC = {"extinction_varies": True, "albedo_varies": True, "g_varies": True}
+SPHERE_DENSITY_SCALE = 7.5  # σ_t of the soft sphere's centre: optical depth 7.5 · 16/15 = 8 along a diameter
 
 
 def cloud_transform(resolution: int) -> np.ndarray:
@@ -77,6 +88,26 @@ def cloud_density(resolution: int, cache: Path | None = CACHE) -> tuple[Grid, bo
     return grid, False
 
 
+def sphere_density(resolution: int) -> Grid:
+    """A smooth soft sphere filling the cloud's cube: density (1 − r²)² at distance r from the centre in
+    units of the half-edge (1 at the centre, 0 from the faces' centres outwards); ∫(1 − x²)² dx = 16/15
+    along a diameter."""
+    index_to_world = cloud_transform(resolution)
+    centres = (np.arange(resolution) * index_to_world[0, 0] + index_to_world[0, 3]) / (CLOUD_SIZE / 2)
+    x, y, z = np.meshgrid(centres, centres, centres, indexing="ij")
+    values = np.clip(1.0 - (x**2 + y**2 + z**2), 0.0, None) ** 2
+    return Grid(values.astype(np.float32), index_to_world, name="density")
+
+
+def density_grid(spec: CloudSpec) -> Grid:
+    """The density grid `spec` names (the cloud from the cache folder where it is there)."""
+    if spec.grid == "sphere":
+        return sphere_density(spec.resolution)
+    if spec.grid == "cloud":
+        return cloud_density(spec.resolution)[0]
+    raise ValueError(f"unknown grid {spec.grid!r}")
+
+
 def _smooth(lo_value: float, hi_value: float) -> spectra.Spectrum:
     """A spectrum varying smoothly from `lo_value` at 380 nm to `hi_value` at 700 nm (flat beyond)."""
     t = np.clip((GRID - 380.0) / 320.0, 0.0, 1.0)
@@ -84,11 +115,9 @@ def _smooth(lo_value: float, hi_value: float) -> spectra.Spectrum:
 
 
 def cloud_medium(spec: CloudSpec, density: Grid) -> Medium:
-    if spec.chromatic:
-        extinction, albedo, anisotropy = _smooth(1.4, 0.7), _smooth(0.6, 0.95), _smooth(0.0, 0.8)
-    else:
-        extinction = spectra.constant(1.0)
-        albedo, anisotropy = spectra.constant(spec.albedo), spectra.constant(spec.g)
+    extinction = _smooth(1.4, 0.7) if spec.extinction_varies else spectra.constant(1.0)
+    albedo = _smooth(0.6, 0.95) if spec.albedo_varies else spectra.constant(spec.albedo)
+    anisotropy = _smooth(0.0, 0.8) if spec.g_varies else spectra.constant(spec.g)
     return Medium(name="cloud", density=density, density_scale=spec.density_scale, extinction=extinction,
                   albedo_densities=np.array([0.0]), albedo_table=albedo.values[None, :], anisotropy=anisotropy)
 
@@ -110,7 +139,7 @@ def camera(spec: CloudSpec) -> Camera:
 def cloud_scene(spec: CloudSpec, density: Grid | None = None, **settings) -> Scene:
     """The benchmark scene for `spec`; `settings` are RenderSettings fields (wavelengths_per_path, …)."""
     if density is None:
-        density, _ = cloud_density(spec.resolution)
+        density = density_grid(spec)
     return Scene(camera=camera(spec), media=(cloud_medium(spec, density),), lights=lights(spec),
                  settings=RenderSettings(**settings))
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from bench.measure import (OurRenderer, at_time, compile_timed, corrected_mse, equal_time, machine, mean_delta_e,
                            reference_noise, render_ours, warm_up, warn_reference, white_for)
-from bench.scenes import CloudSpec, cloud_density, cloud_scene
+from bench.scenes import CHROMATIC, CloudSpec, cloud_density, cloud_scene
 
 REPORT = {"wavelengths_per_path": 1, "wavelength_sampling": "uniform", "lambda_min": 380.0, "lambda_max": 700.0}
 METHODS = {
@@ -43,7 +43,7 @@ ABLATION = {
     "ours 1λ": {**METHODS["ours"], "wavelengths_per_path": 1},
     "4λ uniform": {**REPORT, "wavelengths_per_path": 4, "cmf": "cie1931"},
 }
-SCENES = {"cloud": {"chromatic": False, "g": 0.6}, "chromatic": {"chromatic": True}}
+SCENES = {"cloud": {"g": 0.6}, "chromatic": CHROMATIC}
 
 
 def parse(argv=None):
