@@ -38,7 +38,7 @@ from .layout import (
     SHADOW_ROULETTE_STOP,
 )
 from .numba_cache import cached
-from .rng import path_key, uniform
+from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 
 # Every kernel function divides as NumPy does (x/0 gives inf or nan, like the NumPy backend) instead of
 # Python's model, which checks every divisor for zero to raise ZeroDivisionError: the images are
@@ -57,8 +57,12 @@ SPEC_ROWS = 5
 
 @jit(inline="always")
 def _next(stream):
-    """Next uniform number of the path's stream (stream[0] = key, stream[1] = counter)."""
-    value = uniform(stream[0], stream[1])
+    """Next uniform number of the path's stream (stream = path key, counter, pixel key, sample; `rng`)."""
+    counter = stream[1]
+    if counter < LOW_DISCREPANCY_DIMENSIONS:
+        value = low_discrepancy(stream[2], stream[3], counter)
+    else:
+        value = uniform(stream[0], counter)
     stream[1] += np.uint64(1)
     return value
 
@@ -104,7 +108,7 @@ def _mean(values, n):
 
 # ----------------------------------------------------------------------------- volume look-ups
 
-@jit
+@jit(inline="always")
 def _trilinear(data, offset, nx, ny, nz, x, y, z):
     """Trilinear interpolation of cell-centre samples at index-space point (x, y, z), zero outside."""
     fx, fy, fz = math.floor(x), math.floor(y), math.floor(z)
@@ -534,7 +538,7 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, spec, n, stream, be
                 radiance[i] += beta[i] * phase_values[i] * transmittance[i] * light_radiance[i] / mean_r
 
 
-@jit
+@jit(inline="always")
 def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, r_l, radiance,
                 scratch, medium_s, medium_fl, state_i, state_f, xyz):
     """Trace one camera path; adds its XYZ estimate to `xyz`."""
@@ -729,11 +733,13 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
         medium_fl = np.zeros((media, 2 * MAX_LAMBDAS))
         state_i = np.zeros((media, 7), dtype=np.int64)
         state_f = np.zeros((media, 17))
-        stream = np.zeros(2, dtype=np.uint64)
+        stream = np.zeros(4, dtype=np.uint64)
+        stream[2] = pixel_key(seed, band, pixel)
         xyz = np.zeros(3)
         for sample in range(sample_begin, sample_end):
-            stream[0] = path_key(seed, band, pixel, sample)
+            stream[0] = path_key(stream[2], sample)
             stream[1] = 0
+            stream[3] = sample
             xyz[:] = 0.0
             _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, r_l, radiance,
                         scratch, medium_s, medium_fl, state_i, state_f, xyz)

@@ -33,7 +33,7 @@ from .layout import (
     SHADOW_ROULETTE_BELOW,
     SHADOW_ROULETTE_STOP,
 )
-from .rng import path_key, uniform
+from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
 INF = np.inf
@@ -55,8 +55,13 @@ class _Batch:
 
 
 def _draw(paths, rows=slice(None)):
-    """The next uniform number of each selected path's stream (`paths.key`, `paths.counter`)."""
-    u = uniform(paths.key[rows], paths.counter[rows])
+    """The next uniform number of each selected path's stream (`paths.key`, `paths.counter`, and
+    `paths.pixel_key`, `paths.sample` for the low-discrepancy dimensions; `rng`)."""
+    counter = paths.counter[rows]
+    u = uniform(paths.key[rows], counter)
+    low = np.flatnonzero(counter < LOW_DISCREPANCY_DIMENSIONS)
+    if low.size:
+        u[low] = low_discrepancy(paths.pixel_key[rows][low], paths.sample[rows][low], counter[low])
     paths.counter[rows] += np.uint64(1)
     return u
 
@@ -454,11 +459,13 @@ def _choose_lights(ks, choice):
 
 # ----------------------------------------------------------------------------- transport
 
-def _camera_paths(ks, px, py, keys):
-    """New paths through pixels (px, py) (box filter): wavelengths (hero and stratified companions) and
-    camera rays. Returns the path batch and the camera wavelengths with their pdfs."""
-    count, n = keys.shape[0], ks.wavelengths_per_path
-    paths = _Batch(id=np.arange(count), key=keys, counter=np.zeros(count, dtype=np.uint64),
+def _camera_paths(ks, px, py, pixel_keys, samples):
+    """New paths through pixels (px, py) (box filter), samples `samples` of the pixels keyed `pixel_keys`:
+    wavelengths (hero and stratified companions) and camera rays. Returns the path batch and the camera
+    wavelengths with their pdfs."""
+    count, n = samples.shape[0], ks.wavelengths_per_path
+    paths = _Batch(id=np.arange(count), key=path_key(pixel_keys, samples), pixel_key=pixel_keys,
+                   sample=samples, counter=np.zeros(count, dtype=np.uint64),
                    lams=np.empty((count, n)), beta=np.ones((count, n)), r_u=np.ones((count, n)),
                    r_l=np.ones((count, n)), o=np.zeros((count, 3)), d=np.zeros((count, 3)),
                    depth=np.zeros(count, dtype=np.int64), scattered=np.zeros(count, dtype=bool))
@@ -671,14 +678,14 @@ def _bounce(ks, paths, radiance):
     return paths.take(_roulette(ks, paths))
 
 
-def _trace(ks, px, py, keys):
-    """XYZ estimates (paths, 3) of one camera path per key, through pixels (px, py)."""
-    paths, lam_cam, pdf_cam = _camera_paths(ks, px, py, keys)
+def _trace(ks, px, py, pixel_keys, samples):
+    """XYZ estimates (paths, 3) of one camera path per sample, through pixels (px, py) keyed `pixel_keys`."""
+    paths, lam_cam, pdf_cam = _camera_paths(ks, px, py, pixel_keys, samples)
     radiance = np.zeros(lam_cam.shape)
     while len(paths):
         paths = _bounce(ks, paths, radiance)
     n = lam_cam.shape[1]
-    xyz = np.zeros((keys.shape[0], 3))
+    xyz = np.zeros((samples.shape[0], 3))
     for i in range(n):
         counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
         scale = radiance[:, i] / (pdf_cam[:, i] * n)
@@ -699,8 +706,8 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
         row, column = np.divmod(pixel, tile_width)
         px, py = x0 + column, y0 + row
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
-            keys = path_key(seed, band, py * ks.width + px, sample_begin + sample)
-            xyz = _trace(ks, px, py, keys)
+            pixel_keys = pixel_key(seed, band, py * ks.width + px)
+            xyz = _trace(ks, px, py, pixel_keys, (sample_begin + sample).astype(np.uint64))
         np.add.at(sum_xyz, (row, column), xyz)
         np.add.at(sum_sq, (row, column), xyz * xyz)
 
