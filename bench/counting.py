@@ -44,24 +44,22 @@ def _density(ks, m, px, py, pz):
 
 
 @njit
-def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance, null_ratio,
-                   state_i, state_f, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
+def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker):
     ks.bench_counters[_bench_thread_id() * 8 + 1] += 1
-    _transmittance_uncounted(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance,
-                             null_ratio, state_i, state_f, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
+    _transmittance_uncounted(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker)
 
 
 @njit
-def _tracker_advance(ks, state_i, state_f, t_end):
+def _tracker_advance(ks, tracker, t_end):
     ks.bench_counters[_bench_thread_id() * 8 + 2] += 1
-    _tracker_advance_uncounted(ks, state_i, state_f, t_end)
+    _tracker_advance_uncounted(ks, tracker, t_end)
 '''
 
 CountingScene = namedtuple("CountingScene", KernelScene._fields + ("bench_counters",))
 # The definition lines the wrappers mirror: a changed signature refuses the copy instead of failing to compile.
 _CHECKED = ("def _density(ks, m, px, py, pz):",
-            "def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance, null_ratio,",
-            "def _tracker_advance(ks, state_i, state_f, t_end):")
+            "def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker):",
+            "def _tracker_advance(ks, tracker, t_end):")
 
 
 def counting_backend(folder: Path):

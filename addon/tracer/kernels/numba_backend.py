@@ -16,18 +16,30 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
 - Next-event estimation at every real scattering vertex with ratio-tracked transmittance, combined
   with phase sampling by MIS for environment and finite suns.
 - Thermal emission σ_a·Planck(T) is collected at every tentative collision.
+
+Structure: `render_tile` runs pixels in parallel; `_render_pixel` runs a pixel's samples, each through
+the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `_camera_ray`, then transport
+(`_trace`: `_free_flight`, `_escape`, `_fluoresce`, `_next_event`, `_sample_phase`, `_survives_roulette`),
+then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`). Every
+function below `_render_pixel` is inlined into it, and the kernel scene's arrays are borrowed
+(`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
+reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call.
 """
 
 import functools
 import math
+from collections import namedtuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from ..binned import pdf_binned, sample_binned
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
 from .layout import (
+    CAMERA_PERSPECTIVE,
     LIGHT_ENVIRONMENT,
     LIGHT_SKY,
     LIGHT_SPOT,
@@ -54,6 +66,26 @@ SPEC_ROWS = 5
 
 
 # ----------------------------------------------------------------------------- small helpers
+
+@intrinsic
+def _borrowed(typingctx, scene):
+    """The kernel scene with its arrays borrowed: the same data, without the reference counts that Numba
+    updates whenever an array is passed to a function or sliced. Those updates are atomic operations on
+    counters that every thread shares; the caller keeps the arrays alive for the whole render."""
+
+    def codegen(context, builder, signature, args):
+        (value,) = args
+        for index, member in enumerate(signature.args[0]):
+            if isinstance(member, types.Array):
+                array = context.make_array(member)(context, builder, builder.extract_value(value, index))
+                array.meminfo = cgutils.get_null_value(array.meminfo.type)
+                array.parent = cgutils.get_null_value(array.parent.type)
+                value = builder.insert_value(value, array._getvalue(), index)
+        return value
+
+    return scene(scene), codegen
+
+
 
 @jit(inline="always")
 def _next(stream):
@@ -175,9 +207,11 @@ def _fill_spectral_cache(ks, lams, n, spec):
 
 
 @jit(inline="always")
-def _coefficients(ks, px, py, pz, lams, spec, n, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
+def _coefficients(ks, px, py, pz, lams, spec, n, c):
     """Medium coefficients at a point for each path wavelength (summed over media), per-medium
-    scattering / fluorescence coefficients (for choosing which medium scatters), and emission."""
+    scattering / fluorescence coefficients (for choosing which medium scatters), and emission, into the
+    `Coefficients` c."""
+    sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl = c
     for i in range(n):
         sigma_a[i] = 0.0
         sigma_s[i] = 0.0
@@ -207,13 +241,18 @@ def _coefficients(ks, px, py, pz, lams, spec, n, sigma_a, sigma_s, sigma_fl, emi
 
 # ----------------------------------------------------------------------------- majorant tracking
 
-@jit(inline="always")
-def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, state_i, state_f):
-    """Initialise one DDA per medium over its majorant blocks, in padded index space.
+# One DDA per medium over its majorant blocks, in the medium's padded index space (`Tracker`): slots of
+# state_i[m] (the phase, then the cell and the step per axis) and of state_f[m] (the ray's span in the
+# block grid, the next boundary and the spacing of boundaries per axis, the ray in index space).
+PHASE, CELL, STEP, TRACKER_INTS = 0, 1, 4, 7
+BEFORE, INSIDE, DONE = 0, 1, 2  # phases: the ray has not entered the block grid yet, is in it, has left
+T_ENTRY, T_EXIT, T_NEXT, T_DELTA, ORIGIN, DIRECTION, TRACKER_FLOATS = 0, 1, 2, 5, 11, 14, 17
 
-    state_i[m] = (phase 0 before entry / 1 inside / 2 done, cell x, y, z, step x, y, z)
-    state_f[m] = (t_entry, t_exit, t_next x, y, z, t_delta x, y, z, local o x, y, z, local d x, y, z)
-    """
+
+@jit(inline="always")
+def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, tracker):
+    """Start every medium's DDA for the ray o + t·d, t in [t_min, t_max]."""
+    state_i, state_f = tracker.state_i, tracker.state_f
     for m in range(ks.density_scale.shape[0]):
         w2p = ks.world_to_padded[m]
         lox, loy, loz = _transform_point(w2p, ox, oy, oz)
@@ -233,93 +272,97 @@ def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, state_i, state_f):
             if ta > tb:
                 ta, tb = tb, ta
             t0, t1 = max(t0, ta), min(t1, tb)
-        state_i[m, 0] = 2 if t0 >= t1 else 0
-        state_f[m, 0], state_f[m, 1] = t0, t1
-        state_f[m, 11], state_f[m, 12], state_f[m, 13] = lox, loy, loz
-        state_f[m, 14], state_f[m, 15], state_f[m, 16] = ldx, ldy, ldz
+        state_i[m, PHASE] = DONE if t0 >= t1 else BEFORE
+        state_f[m, T_ENTRY], state_f[m, T_EXIT] = t0, t1
+        state_f[m, ORIGIN], state_f[m, ORIGIN + 1], state_f[m, ORIGIN + 2] = lox, loy, loz
+        state_f[m, DIRECTION], state_f[m, DIRECTION + 1], state_f[m, DIRECTION + 2] = ldx, ldy, ldz
 
 
 @jit(inline="always")
-def _tracker_enter(ks, m, state_i, state_f):
-    t = state_f[m, 0]
+def _tracker_enter(ks, m, tracker):
+    state_i, state_f = tracker.state_i, tracker.state_f
+    t = state_f[m, T_ENTRY]
     block = ks.majorant_block[m]
     shape = ks.majorant_shape[m]
     for axis in range(3):
-        o = state_f[m, 11 + axis]
-        d = state_f[m, 14 + axis]
+        o = state_f[m, ORIGIN + axis]
+        d = state_f[m, DIRECTION + axis]
         q = o + t * d
         cell = min(max(int(math.floor(q / block)), 0), shape[axis] - 1)
-        state_i[m, 1 + axis] = cell
+        state_i[m, CELL + axis] = cell
         if d > 0.0:
-            state_i[m, 4 + axis] = 1
-            state_f[m, 2 + axis] = ((cell + 1) * block - o) / d
-            state_f[m, 5 + axis] = block / d
+            state_i[m, STEP + axis] = 1
+            state_f[m, T_NEXT + axis] = ((cell + 1) * block - o) / d
+            state_f[m, T_DELTA + axis] = block / d
         elif d < 0.0:
-            state_i[m, 4 + axis] = -1
-            state_f[m, 2 + axis] = (cell * block - o) / d
-            state_f[m, 5 + axis] = -block / d
+            state_i[m, STEP + axis] = -1
+            state_f[m, T_NEXT + axis] = (cell * block - o) / d
+            state_f[m, T_DELTA + axis] = -block / d
         else:
-            state_i[m, 4 + axis] = 0
-            state_f[m, 2 + axis] = INF
-            state_f[m, 5 + axis] = INF
-    state_i[m, 0] = 1
+            state_i[m, STEP + axis] = 0
+            state_f[m, T_NEXT + axis] = INF
+            state_f[m, T_DELTA + axis] = INF
+    state_i[m, PHASE] = INSIDE
 
 
 @jit(inline="always")
-def _tracker_boundary(state_i, state_f, m):
+def _tracker_boundary(tracker, m):
     """The ray parameter where medium m's current majorant changes next."""
-    phase = state_i[m, 0]
-    if phase == 0:
-        return state_f[m, 0]
-    if phase == 1:
-        return min(state_f[m, 1], state_f[m, 2], state_f[m, 3], state_f[m, 4])
+    state_f = tracker.state_f
+    phase = tracker.state_i[m, PHASE]
+    if phase == BEFORE:
+        return state_f[m, T_ENTRY]
+    if phase == INSIDE:
+        return min(state_f[m, T_EXIT], state_f[m, T_NEXT], state_f[m, T_NEXT + 1], state_f[m, T_NEXT + 2])
     return INF
 
 
 @jit(inline="always")
-def _tracker_segment(ks, state_i, state_f):
+def _tracker_segment(ks, tracker):
     """(end of the current segment, combined majorant σ̄ on it)."""
+    state_i = tracker.state_i
     t_end = INF
     sigma = 0.0
     for m in range(ks.density_scale.shape[0]):
-        t_end = min(t_end, _tracker_boundary(state_i, state_f, m))
-        if state_i[m, 0] == 1:
+        t_end = min(t_end, _tracker_boundary(tracker, m))
+        if state_i[m, PHASE] == INSIDE:
             shape = ks.majorant_shape[m]
-            index = (state_i[m, 1] * shape[1] + state_i[m, 2]) * shape[2] + state_i[m, 3]
+            index = (state_i[m, CELL] * shape[1] + state_i[m, CELL + 1]) * shape[2] + state_i[m, CELL + 2]
             sigma += ks.majorant_data[ks.majorant_offset[m] + index] * ks.majorant_coeff[m]
     return t_end, sigma
 
 
 @jit(inline="always")
-def _tracker_advance(ks, state_i, state_f, t_end):
+def _tracker_advance(ks, tracker, t_end):
     """Move every medium whose boundary is at `t_end` into its next block (or out)."""
+    state_i, state_f = tracker.state_i, tracker.state_f
     for m in range(ks.density_scale.shape[0]):
-        if _tracker_boundary(state_i, state_f, m) > t_end:
+        if _tracker_boundary(tracker, m) > t_end:
             continue
-        if state_i[m, 0] == 0:
-            _tracker_enter(ks, m, state_i, state_f)
+        if state_i[m, PHASE] == BEFORE:
+            _tracker_enter(ks, m, tracker)
             continue
-        if state_f[m, 1] <= t_end:
-            state_i[m, 0] = 2
+        if state_f[m, T_EXIT] <= t_end:
+            state_i[m, PHASE] = DONE
             continue
         axis = 0
-        if state_f[m, 3] < state_f[m, 2 + axis]:
+        if state_f[m, T_NEXT + 1] < state_f[m, T_NEXT + axis]:
             axis = 1
-        if state_f[m, 4] < state_f[m, 2 + axis]:
+        if state_f[m, T_NEXT + 2] < state_f[m, T_NEXT + axis]:
             axis = 2
-        state_i[m, 1 + axis] += state_i[m, 4 + axis]
-        state_f[m, 2 + axis] += state_f[m, 5 + axis]
-        cell = state_i[m, 1 + axis]
+        state_i[m, CELL + axis] += state_i[m, STEP + axis]
+        state_f[m, T_NEXT + axis] += state_f[m, T_DELTA + axis]
+        cell = state_i[m, CELL + axis]
         if cell < 0 or cell >= ks.majorant_shape[m, axis]:
-            state_i[m, 0] = 2
+            state_i[m, PHASE] = DONE
 
 
 @jit(inline="always")
-def _tentative_collision(ks, stream, state_i, state_f, t):
+def _tentative_collision(ks, stream, tracker, t):
     """Delta tracking from ray parameter t: the next tentative collision (t, σ̄ there), or (INF, 0)
     when the ray leaves every medium (or passes the tracker's t_max)."""
     while True:
-        t_end, sigma_bar = _tracker_segment(ks, state_i, state_f)
+        t_end, sigma_bar = _tracker_segment(ks, tracker)
         if t_end == INF:
             return INF, 0.0
         if sigma_bar > 0.0:
@@ -327,7 +370,7 @@ def _tentative_collision(ks, stream, state_i, state_f, t):
             if t + step < t_end:
                 return t + step, sigma_bar
         t = t_end
-        _tracker_advance(ks, state_i, state_f, t_end)
+        _tracker_advance(ks, tracker, t_end)
 
 
 # ----------------------------------------------------------------------------- phase functions
@@ -449,46 +492,125 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
     return wx, wy, wz, 1.0, distance, True
 
 
+# ----------------------------------------------------------------------------- path state
+
+# One path's state, one slot per wavelength (buffers made once per pixel by `_new_path`, reused by its
+# samples): the stream of random numbers (`_next`), camera wavelengths and their pdfs, current
+# wavelengths (the hero changes at fluorescence), the media's spectra at them (`_fill_spectral_cache`),
+# throughput, the MIS pdf ratios of unidirectional and light sampling, and the radiance collected.
+Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance")
+# Medium coefficients at a point (`_coefficients`): per wavelength summed over media, and per medium.
+Coefficients = namedtuple("Coefficients", "sigma_a sigma_s sigma_fl emission medium_s medium_fl")
+# Next-event estimation's per-wavelength values: the light's radiance, the phase function, ratio-tracked
+# transmittance and null-event ratio, and the MIS sums.
+LightSample = namedtuple("LightSample", "radiance phase transmittance null_ratio r_l r_u")
+# One majorant DDA per medium (`_tracker_*`): integer and float state per medium.
+Tracker = namedtuple("Tracker", "state_i state_f")
+
+
+@jit(inline="always")
+def _new_path(media):
+    return Path(np.zeros(4, dtype=np.uint64), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
+                np.empty((media, SPEC_ROWS, MAX_LAMBDAS)), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
+                np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS))
+
+
+@jit(inline="always")
+def _new_coefficients(media):
+    return Coefficients(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
+                        np.zeros((media, MAX_LAMBDAS)), np.zeros((media, MAX_LAMBDAS)))
+
+
+@jit(inline="always")
+def _new_light_sample():
+    return LightSample(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
+                       np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS))
+
+
+@jit(inline="always")
+def _new_tracker(media):
+    return Tracker(np.zeros((media, TRACKER_INTS), dtype=np.int64), np.zeros((media, TRACKER_FLOATS)))
+
+
+# ----------------------------------------------------------------------------- camera and film
+
+@jit(inline="always")
+def _sample_wavelengths(ks, n, path):
+    """The path's wavelengths: a hero drawn from the band's distribution and companions at u + i/n
+    (stratified inverse CDF), with fresh weights."""
+    u = _next(path.stream)
+    for i in range(n):
+        ui = u + i / n
+        ui -= math.floor(ui)
+        path.lam_cam[i] = sample_binned(ks.lambda_cdf, ui)
+        path.pdf_cam[i] = pdf_binned(ks.lambda_pdf, path.lam_cam[i])
+        path.lams[i] = path.lam_cam[i]
+        path.beta[i] = 1.0
+        path.r_u[i] = 1.0
+        path.r_l[i] = 1.0
+        path.radiance[i] = 0.0
+    _fill_spectral_cache(ks, path.lams, n, path.spec)
+
+
+@jit(inline="always")
+def _camera_ray(ks, px, py, stream):
+    """Origin and unit direction of a ray through pixel (px, py) (box filter), Blender camera conventions."""
+    ex, ey = ks.cam_extent[0], ks.cam_extent[1]
+    cx = (-0.5 + (px + _next(stream)) / ks.width) * ex + ks.cam_extent[2]
+    cy = (0.5 - (py + _next(stream)) / ks.height) * ey + ks.cam_extent[3]
+    if ks.cam_kind == CAMERA_PERSPECTIVE:
+        ox, oy, oz = _transform_point(ks.cam_to_world, 0.0, 0.0, 0.0)
+        dx, dy, dz = _transform_vector(ks.cam_to_world, cx, cy, -1.0)
+    else:
+        ox, oy, oz = _transform_point(ks.cam_to_world, cx, cy, 0.0)
+        dx, dy, dz = _transform_vector(ks.cam_to_world, 0.0, 0.0, -1.0)
+    dx, dy, dz = _normalize(dx, dy, dz)
+    return ox, oy, oz, dx, dy, dz
+
+
+@jit(inline="always")
+def _path_xyz(ks, n, path):
+    """The path's XYZ estimate: each camera wavelength's radiance over its pdf, through the XYZ weights."""
+    x, y, z = 0.0, 0.0, 0.0
+    for i in range(n):
+        if path.radiance[i] == 0.0 or path.pdf_cam[i] <= 0.0:
+            continue
+        scale = path.radiance[i] / (path.pdf_cam[i] * n)
+        x += scale * _table(ks.xyz_weights[0], path.lam_cam[i])
+        y += scale * _table(ks.xyz_weights[1], path.lam_cam[i])
+        z += scale * _table(ks.xyz_weights[2], path.lam_cam[i])
+    return x, y, z
+
+
 # ----------------------------------------------------------------------------- transport
 
 @jit(inline="always")
-def _medium_scratch_s(medium_s):
-    """Second half of the per-medium σ_s buffer: shadow rays write there, keeping the vertex's values."""
-    return medium_s[:, MAX_LAMBDAS:]
-
-
-@jit(inline="always")
-def _medium_scratch_fl(medium_fl):
-    return medium_fl[:, MAX_LAMBDAS:]
-
-
-@jit(inline="always")
-def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, transmittance, null_ratio,
-                   state_i, state_f, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl):
-    """Ratio tracking along a shadow ray: fills `transmittance` (per λ) and `null_ratio`, the product
-    of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) per λ (for MIS)."""
+def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker):
+    """Ratio tracking along a shadow ray: fills `light.transmittance` (per λ) and `light.null_ratio`, the
+    product of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) per λ (for MIS); `shadow` holds
+    the coefficients along the ray."""
+    transmittance, null_ratio = light.transmittance, light.null_ratio
     for i in range(n):
         transmittance[i] = 1.0
         null_ratio[i] = 1.0
-    _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, state_i, state_f)
+    _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, tracker)
     t = 0.0
     while True:
-        t, sigma_bar = _tentative_collision(ks, stream, state_i, state_f, t)
+        t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t)
         if t == INF:
             return
-        _coefficients(ks, ox + t * dx, oy + t * dy, oz + t * dz, lams, spec, n,
-                      sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
+        _coefficients(ks, ox + t * dx, oy + t * dy, oz + t * dz, path.lams, path.spec, n, shadow)
         largest = 0.0
         for i in range(n):
-            sigma_n = max(0.0, sigma_bar - sigma_a[i] - sigma_s[i])
+            sigma_n = max(0.0, sigma_bar - shadow.sigma_a[i] - shadow.sigma_s[i])
             transmittance[i] *= sigma_n / sigma_bar
-            null_ratio[i] *= sigma_n / (sigma_bar + sigma_fl[i])
+            null_ratio[i] *= sigma_n / (sigma_bar + shadow.sigma_fl[i])
             largest = max(largest, transmittance[i])
         if largest == 0.0:
             return
         if largest < SHADOW_ROULETTE_BELOW:
             # Russian roulette on faint shadow rays: unbiased, and stops long walks through dense media.
-            if _next(stream) < SHADOW_ROULETTE_STOP:
+            if _next(path.stream) < SHADOW_ROULETTE_STOP:
                 for i in range(n):
                     transmittance[i] = 0.0
                 return
@@ -497,216 +619,223 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, lams, spec, n, stream, tra
 
 
 @jit(inline="always")
-def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, spec, n, stream, beta, r_u, radiance,
-                scratch, medium_s, medium_fl, state_i, state_f):
+def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, shadow, light, tracker):
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
     transmittance, MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
-    light_radiance, phase_values, transmittance, null_ratio = scratch[4], scratch[5], scratch[6], scratch[7]
-    r_l_light, r_u_light = scratch[8], scratch[9]
     n_lights = ks.light_kind.shape[0]
-    light = 0
-    choice = _next(stream)
-    while light < n_lights - 1 and choice >= ks.light_pmf[light]:
-        choice -= ks.light_pmf[light]
-        light += 1
-    u1, u2 = _next(stream), _next(stream)
-    wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, light, ox, oy, oz, u1, u2, lams, n,
-                                                               light_radiance)
+    chosen = 0
+    choice = _next(path.stream)
+    while chosen < n_lights - 1 and choice >= ks.light_pmf[chosen]:
+        choice -= ks.light_pmf[chosen]
+        chosen += 1
+    u1, u2 = _next(path.stream), _next(path.stream)
+    wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, chosen, ox, oy, oz, u1, u2, path.lams, n,
+                                                               light.radiance)
     cos_theta = dx * wx + dy * wy + dz * wz
+    if isotropic:
+        for i in range(n):
+            light.phase[i] = 0.25 / math.pi
+    else:
+        _mixture_phase(ks, vertex.medium_s, path.spec, n, cos_theta, light.phase)
+    any_light = False
+    for i in range(n):
+        if light.radiance[i] > 0.0 and light.phase[i] > 0.0 and path.beta[i] > 0.0:
+            any_light = True
+    if not any_light:
+        return
+    _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, n, path, shadow, light, tracker)
+    light_pdf = ks.light_pmf[chosen] * direction_pdf
+    for i in range(n):
+        light.r_l[i] = path.r_u[i] * light_pdf
+        light.r_u[i] = 0.0 if delta else path.r_u[i] * light.phase[i] * light.null_ratio[i]
+    for i in range(n):
+        light.r_l[i] += light.r_u[i]
+    mean_r = _mean(light.r_l, n)
+    if mean_r > 0.0:
+        for i in range(n):
+            path.radiance[i] += path.beta[i] * light.phase[i] * light.transmittance[i] * light.radiance[i] / mean_r
+
+
+@jit(inline="always")
+def _free_flight(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, tracker):
+    """Delta tracking to the next real event, collecting thermal emission at every tentative collision and
+    weighting null collisions (spectral MIS ratios included). Returns (event, collision point, σ̄ there);
+    `vertex` keeps the coefficients at a scattering or fluorescent collision."""
+    beta, r_u, r_l = path.beta, path.r_u, path.r_l
+    sigma_a, sigma_s, sigma_fl = vertex.sigma_a, vertex.sigma_s, vertex.sigma_fl
+    _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, tracker)
+    t = 0.0
+    while True:
+        t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t)
+        if t == INF:
+            return EVENT_ESCAPE, ox, oy, oz, 0.0
+        qx, qy, qz = ox + t * dx, oy + t * dy, oz + t * dz
+        _coefficients(ks, qx, qy, qz, path.lams, path.spec, n, vertex)
+        mean_r_u = _mean(r_u, n)
+        for i in range(n):
+            if vertex.emission[i] > 0.0:
+                path.radiance[i] += beta[i] * vertex.emission[i] / (sigma_bar * mean_r_u)
+        total = sigma_bar + sigma_fl[0]
+        sigma_n0 = max(0.0, sigma_bar - sigma_a[0] - sigma_s[0])
+        choice = _next(path.stream) * total
+        if choice < sigma_a[0] + sigma_s[0]:
+            # A real collision scatters, weighted by the albedo: absorption lowers the throughput
+            # instead of ending the path (Russian roulette ends faint paths).
+            probability0 = (sigma_a[0] + sigma_s[0]) / total
+            alive = False
+            for i in range(n):
+                beta[i] *= sigma_s[i] / sigma_bar / probability0
+                r_u[i] *= (sigma_a[i] + sigma_s[i]) / (sigma_bar + sigma_fl[i]) / probability0
+                if beta[i] > 0.0:
+                    alive = True
+            return (EVENT_SCATTER if alive else EVENT_ABSORB), qx, qy, qz, sigma_bar
+        if choice < sigma_a[0] + sigma_s[0] + sigma_fl[0]:
+            return EVENT_FLUORESCE, qx, qy, qz, sigma_bar
+        probability0 = sigma_n0 / total
+        alive = False
+        for i in range(n):
+            sigma_n = max(0.0, sigma_bar - sigma_a[i] - sigma_s[i])
+            beta[i] *= sigma_n / sigma_bar / probability0
+            r_u[i] *= sigma_n / (sigma_bar + sigma_fl[i]) / probability0
+            r_l[i] /= probability0
+            if beta[i] > 0.0:
+                alive = True
+        if not alive:
+            return EVENT_ABSORB, qx, qy, qz, sigma_bar
+
+
+@jit(inline="always")
+def _escape(ks, dx, dy, dz, scattered, n, path, light):
+    """Radiance of the infinite lights seen along the escaping ray: plain for a camera ray, MIS-weighted
+    against light sampling after a scattering vertex."""
+    for chosen in range(ks.light_kind.shape[0]):
+        for i in range(n):
+            light.radiance[i] = _infinite_radiance(ks, chosen, path.lams[i], dx, dy, dz)
+        if not scattered:
+            mean_r = _mean(path.r_u, n)
+        else:
+            light_pdf = ks.light_pmf[chosen] * _infinite_pdf(ks, chosen, dx, dy, dz)
+            for i in range(n):
+                light.r_l[i] = path.r_u[i] + path.r_l[i] * light_pdf
+            mean_r = _mean(light.r_l, n)
+        for i in range(n):
+            path.radiance[i] += path.beta[i] * light.radiance[i] / mean_r
+
+
+@jit(inline="always")
+def _fluoresce(ks, sigma_bar, n, path, vertex):
+    """Backward fluorescence: the hero's wavelength becomes an excitation wavelength drawn ∝ excitation
+    of the medium that fluoresced; the companions are dropped."""
+    medium = _pick_medium(vertex.medium_fl, 0, _next(path.stream))
+    path.beta[0] *= (sigma_bar + vertex.sigma_fl[0]) / sigma_bar
+    path.lams[0] = sample_binned(ks.excitation_cdf[medium], _next(path.stream))
+    for i in range(1, n):
+        path.beta[i] = 0.0
+        path.r_u[i] = 0.0
+        path.r_l[i] = 0.0
+    _fill_spectral_cache(ks, path.lams, n, path.spec)
+
+
+@jit(inline="always")
+def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
+    """Phase sampling of the next direction (the hero's phase; MIS pdfs at every wavelength): the new
+    direction, or a zero vector when the hero's pdf is zero (the path ends)."""
+    u1, u2 = _next(path.stream), _next(path.stream)
+    phase_values = light.phase
+    if isotropic:
+        new_cos = 1.0 - 2.0 * u1
+    else:
+        medium = _pick_medium(vertex.medium_s, 0, _next(path.stream))
+        if ks.phase_kind[medium] == PHASE_RAYLEIGH:
+            new_cos = rayleigh_sample_cos(u1)
+        else:
+            new_cos = hg_sample_cos(path.spec[medium, SPEC_ANISOTROPY, 0], u1)
+    nx, ny, nz = sample_direction((dx, dy, dz), new_cos, u2)
     if isotropic:
         for i in range(n):
             phase_values[i] = 0.25 / math.pi
     else:
-        _mixture_phase(ks, medium_s, spec, n, cos_theta, phase_values)
-    any_light = False
+        _mixture_phase(ks, vertex.medium_s, path.spec, n, new_cos, phase_values)
+    pdf0 = phase_values[0]
+    if pdf0 <= 0.0:
+        return 0.0, 0.0, 0.0
     for i in range(n):
-        if light_radiance[i] > 0.0 and phase_values[i] > 0.0 and beta[i] > 0.0:
-            any_light = True
-    if any_light:
-        _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, lams, spec, n, stream, transmittance, null_ratio,
-                       state_i, state_f, scratch[10], scratch[11], scratch[12], scratch[13],
-                       _medium_scratch_s(medium_s), _medium_scratch_fl(medium_fl))
-        light_pdf = ks.light_pmf[light] * direction_pdf
-        for i in range(n):
-            r_l_light[i] = r_u[i] * light_pdf
-            r_u_light[i] = 0.0 if delta else r_u[i] * phase_values[i] * null_ratio[i]
-        for i in range(n):
-            r_l_light[i] += r_u_light[i]
-        mean_r = _mean(r_l_light, n)
-        if mean_r > 0.0:
-            for i in range(n):
-                radiance[i] += beta[i] * phase_values[i] * transmittance[i] * light_radiance[i] / mean_r
+        path.r_l[i] = path.r_u[i] / pdf0
+        path.beta[i] *= phase_values[i] / pdf0
+        path.r_u[i] *= phase_values[i] / pdf0
+    return _normalize(nx, ny, nz)
 
 
 @jit(inline="always")
-def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, r_l, radiance,
-                scratch, medium_s, medium_fl, state_i, state_f, xyz):
-    """Trace one camera path; adds its XYZ estimate to `xyz`."""
-    sigma_a, sigma_s, sigma_fl, emission = scratch[0], scratch[1], scratch[2], scratch[3]
-    light_radiance, phase_values, r_l_light = scratch[4], scratch[5], scratch[8]
-
-    # Wavelengths: hero and stratified companions.
-    u = _next(stream)
+def _survives_roulette(ks, depth, n, path):
+    """Russian roulette on the MIS-weighted throughput from `rr_depth` on; survivors are reweighted."""
+    if depth < ks.rr_depth:
+        return True
+    mean_r = _mean(path.r_u, n)
+    largest = 0.0
     for i in range(n):
-        ui = u + i / n
-        ui -= math.floor(ui)
-        lam_cam[i] = sample_binned(ks.lambda_cdf, ui)
-        pdf_cam[i] = pdf_binned(ks.lambda_pdf, lam_cam[i])
-        lams[i] = lam_cam[i]
-        beta[i] = 1.0
-        r_u[i] = 1.0
-        r_l[i] = 1.0
-        radiance[i] = 0.0
-    _fill_spectral_cache(ks, lams, n, spec)
+        largest = max(largest, path.beta[i] / mean_r)
+    if largest >= 1.0:
+        return True
+    survive = max(largest, 0.05)
+    if _next(path.stream) >= survive:
+        return False
+    for i in range(n):
+        path.beta[i] /= survive
+    return True
 
-    # Camera ray through the pixel (box filter), Blender camera conventions.
-    ex, ey = ks.cam_extent[0], ks.cam_extent[1]
-    cx = (-0.5 + (px + _next(stream)) / ks.width) * ex + ks.cam_extent[2]
-    cy = (0.5 - (py + _next(stream)) / ks.height) * ey + ks.cam_extent[3]
-    if ks.cam_kind == 0:
-        ox, oy, oz = _transform_point(ks.cam_to_world, 0.0, 0.0, 0.0)
-        dx, dy, dz = _transform_vector(ks.cam_to_world, cx, cy, -1.0)
-    else:
-        ox, oy, oz = _transform_point(ks.cam_to_world, cx, cy, 0.0)
-        dx, dy, dz = _transform_vector(ks.cam_to_world, 0.0, 0.0, -1.0)
-    dx, dy, dz = _normalize(dx, dy, dz)
 
+@jit(inline="always")
+def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker):
+    """Transport of one path from a camera ray: collects its radiance per wavelength in `path.radiance`."""
     depth = 0
     scattered = False
-    n_lights = ks.light_kind.shape[0]
     while True:
-        # Free flight to the next real event (or escape), null collisions handled inline.
-        event = EVENT_ESCAPE
-        _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, state_i, state_f)
-        t = 0.0
-        while True:
-            t, sigma_bar = _tentative_collision(ks, stream, state_i, state_f, t)
-            if t == INF:
-                break
-            qx, qy, qz = ox + t * dx, oy + t * dy, oz + t * dz
-            _coefficients(ks, qx, qy, qz, lams, spec, n, sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl)
-            mean_r_u = _mean(r_u, n)
-            for i in range(n):
-                if emission[i] > 0.0:
-                    radiance[i] += beta[i] * emission[i] / (sigma_bar * mean_r_u)
-            total = sigma_bar + sigma_fl[0]
-            sigma_n0 = max(0.0, sigma_bar - sigma_a[0] - sigma_s[0])
-            choice = _next(stream) * total
-            if choice < sigma_a[0] + sigma_s[0]:
-                # A real collision scatters, weighted by the albedo: absorption lowers the throughput
-                # instead of ending the path (Russian roulette ends faint paths).
-                probability0 = (sigma_a[0] + sigma_s[0]) / total
-                alive = False
-                for i in range(n):
-                    beta[i] *= sigma_s[i] / sigma_bar / probability0
-                    r_u[i] *= (sigma_a[i] + sigma_s[i]) / (sigma_bar + sigma_fl[i]) / probability0
-                    if beta[i] > 0.0:
-                        alive = True
-                event = EVENT_SCATTER if alive else EVENT_ABSORB
-                break
-            if choice < sigma_a[0] + sigma_s[0] + sigma_fl[0]:
-                event = EVENT_FLUORESCE
-                break
-            probability0 = sigma_n0 / total
-            alive = False
-            for i in range(n):
-                sigma_n = max(0.0, sigma_bar - sigma_a[i] - sigma_s[i])
-                beta[i] *= sigma_n / sigma_bar / probability0
-                r_u[i] *= sigma_n / (sigma_bar + sigma_fl[i]) / probability0
-                r_l[i] /= probability0
-                if beta[i] > 0.0:
-                    alive = True
-            if not alive:
-                event = EVENT_ABSORB
-                break
-
+        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, tracker)
         if event == EVENT_ABSORB:
-            break
+            return
         if event == EVENT_ESCAPE:
-            for light in range(n_lights):
-                for i in range(n):
-                    le = _infinite_radiance(ks, light, lams[i], dx, dy, dz)
-                    light_radiance[i] = le
-                if not scattered:
-                    mean_r = _mean(r_u, n)
-                    for i in range(n):
-                        radiance[i] += beta[i] * light_radiance[i] / mean_r
-                else:
-                    light_pdf = ks.light_pmf[light] * _infinite_pdf(ks, light, dx, dy, dz)
-                    for i in range(n):
-                        r_l_light[i] = r_u[i] + r_l[i] * light_pdf
-                    mean_r = _mean(r_l_light, n)
-                    for i in range(n):
-                        radiance[i] += beta[i] * light_radiance[i] / mean_r
-            break
-
-        # A real scattering (or fluorescent) vertex at q.
+            _escape(ks, dx, dy, dz, scattered, n, path, light)
+            return
         depth += 1
         if depth > ks.max_depth:
-            break
+            return
         ox, oy, oz = qx, qy, qz
-        isotropic = False
-        if event == EVENT_FLUORESCE:
-            medium = _pick_medium(medium_fl, 0, _next(stream))
-            beta[0] *= (sigma_bar + sigma_fl[0]) / sigma_bar
-            lams[0] = sample_binned(ks.excitation_cdf[medium], _next(stream))
-            for i in range(1, n):
-                beta[i] = 0.0
-                r_u[i] = 0.0
-                r_l[i] = 0.0
-            _fill_spectral_cache(ks, lams, n, spec)
-            isotropic = True
-
-        if n_lights > 0:
-            _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, lams, spec, n, stream, beta, r_u, radiance,
-                        scratch, medium_s, medium_fl, state_i, state_f)
-
-        # Phase sampling for the next direction (hero's phase; MIS pdfs at every wavelength).
-        u1, u2 = _next(stream), _next(stream)
+        isotropic = event == EVENT_FLUORESCE
         if isotropic:
-            new_cos = 1.0 - 2.0 * u1
-        else:
-            medium = _pick_medium(medium_s, 0, _next(stream))
-            if ks.phase_kind[medium] == PHASE_RAYLEIGH:
-                new_cos = rayleigh_sample_cos(u1)
-            else:
-                new_cos = hg_sample_cos(spec[medium, SPEC_ANISOTROPY, 0], u1)
-        nx, ny, nz = sample_direction((dx, dy, dz), new_cos, u2)
-        if isotropic:
-            for i in range(n):
-                phase_values[i] = 0.25 / math.pi
-        else:
-            _mixture_phase(ks, medium_s, spec, n, new_cos, phase_values)
-        pdf0 = phase_values[0]
-        if pdf0 <= 0.0:
-            break
-        for i in range(n):
-            r_l[i] = r_u[i] / pdf0
-            beta[i] *= phase_values[i] / pdf0
-            r_u[i] *= phase_values[i] / pdf0
-        dx, dy, dz = _normalize(nx, ny, nz)
+            _fluoresce(ks, sigma_bar, n, path, vertex)
+        if ks.light_kind.shape[0] > 0:
+            _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, shadow, light, tracker)
+        dx, dy, dz = _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light)
+        if dx == 0.0 and dy == 0.0 and dz == 0.0:
+            return
         scattered = True
+        if not _survives_roulette(ks, depth, n, path):
+            return
 
-        # Russian roulette on the MIS-weighted throughput.
-        if depth >= ks.rr_depth:
-            mean_r = _mean(r_u, n)
-            largest = 0.0
-            for i in range(n):
-                largest = max(largest, beta[i] / mean_r)
-            if largest < 1.0:
-                survive = max(largest, 0.05)
-                if _next(stream) >= survive:
-                    break
-                for i in range(n):
-                    beta[i] /= survive
 
-    for i in range(n):
-        if radiance[i] == 0.0 or pdf_cam[i] <= 0.0:
-            continue
-        scale = radiance[i] / (pdf_cam[i] * n)
-        xyz[0] += scale * _table(ks.xyz_weights[0], lam_cam[i])
-        xyz[1] += scale * _table(ks.xyz_weights[1], lam_cam[i])
-        xyz[2] += scale * _table(ks.xyz_weights[2], lam_cam[i])
+@jit
+def _render_pixel(ks, px, py, pixel, sample_begin, sample_end, seed, band):
+    """Samples [sample_begin, sample_end) of one pixel: (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z²)."""
+    media = max(ks.density_scale.shape[0], 1)
+    n = ks.wavelengths_per_path
+    path = _new_path(media)
+    vertex, shadow = _new_coefficients(media), _new_coefficients(media)
+    light = _new_light_sample()
+    tracker = _new_tracker(media)
+    path.stream[2] = pixel_key(seed, band, pixel)
+    sx, sy, sz, qx, qy, qz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    for sample in range(sample_begin, sample_end):
+        path.stream[0] = path_key(path.stream[2], sample)
+        path.stream[1] = 0
+        path.stream[3] = sample
+        _sample_wavelengths(ks, n, path)
+        ox, oy, oz, dx, dy, dz = _camera_ray(ks, px, py, path.stream)
+        _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker)
+        x, y, z = _path_xyz(ks, n, path)
+        sx, sy, sz = sx + x, sy + y, sz + z
+        qx, qy, qz = qx + x * x, qy + y * y, qz + z * z
+    return sx, sy, sz, qx, qy, qz
 
 
 @cached
@@ -714,38 +843,17 @@ def _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, 
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
-    media = max(ks.density_scale.shape[0], 1)
-    n = ks.wavelengths_per_path
     for index in prange(tile_width * tile_height):
         row, column = index // tile_width, index % tile_width
         px, py = x0 + column, y0 + row
-        pixel = py * ks.width + px
-        lam_cam = np.empty(MAX_LAMBDAS)
-        pdf_cam = np.empty(MAX_LAMBDAS)
-        lams = np.empty(MAX_LAMBDAS)
-        spec = np.empty((media, SPEC_ROWS, MAX_LAMBDAS))
-        beta = np.empty(MAX_LAMBDAS)
-        r_u = np.empty(MAX_LAMBDAS)
-        r_l = np.empty(MAX_LAMBDAS)
-        radiance = np.empty(MAX_LAMBDAS)
-        scratch = np.empty((14, MAX_LAMBDAS))
-        medium_s = np.zeros((media, 2 * MAX_LAMBDAS))
-        medium_fl = np.zeros((media, 2 * MAX_LAMBDAS))
-        state_i = np.zeros((media, 7), dtype=np.int64)
-        state_f = np.zeros((media, 17))
-        stream = np.zeros(4, dtype=np.uint64)
-        stream[2] = pixel_key(seed, band, pixel)
-        xyz = np.zeros(3)
-        for sample in range(sample_begin, sample_end):
-            stream[0] = path_key(stream[2], sample)
-            stream[1] = 0
-            stream[3] = sample
-            xyz[:] = 0.0
-            _trace_path(ks, px, py, stream, n, lam_cam, pdf_cam, lams, spec, beta, r_u, r_l, radiance,
-                        scratch, medium_s, medium_fl, state_i, state_f, xyz)
-            for c in range(3):
-                sum_xyz[row, column, c] += xyz[c]
-                sum_sq[row, column, c] += xyz[c] * xyz[c]
+        sx, sy, sz, qx, qy, qz = _render_pixel(_borrowed(ks), px, py, py * ks.width + px, sample_begin,
+                                               sample_end, seed, band)
+        sum_xyz[row, column, 0] += sx
+        sum_xyz[row, column, 1] += sy
+        sum_xyz[row, column, 2] += sz
+        sum_sq[row, column, 0] += qx
+        sum_sq[row, column, 1] += qy
+        sum_sq[row, column, 2] += qz
 
 
 def set_threads(count: int) -> None:

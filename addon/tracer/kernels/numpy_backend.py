@@ -10,7 +10,7 @@ Free flight and shadow rays traverse each medium's majorant grid block by block,
 rays (`_tracker_*`, the same state machine as the Numba kernel's): each loop iteration moves every ray by
 one segment or one tentative collision, and rays that are done leave the batch.
 
-Every path draws from the same counter-based stream (`rng.path_key`, `rng.uniform`), in the same order
+Every path draws from the same stream of random numbers (`rng`: low-discrepancy, then hashed), in the same order
 and with the same arithmetic as the Numba kernel, so the two backends trace the same paths: images agree
 pixel by pixel up to floating-point differences (transcendental functions may differ in the last bit,
 which can send a path down another branch). Masked lanes may compute values that are then discarded
