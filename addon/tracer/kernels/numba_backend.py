@@ -818,11 +818,17 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker):
 def _render_pixel(ks, px, py, pixel, sample_begin, sample_end, seed, band):
     """Samples [sample_begin, sample_end) of one pixel: (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z²)."""
     media = max(ks.density_scale.shape[0], 1)
+    return _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, _new_path(media),
+                           _new_coefficients(media), _new_coefficients(media), _new_light_sample(), _new_tracker(media))
+
+
+@jit
+def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, shadow, light, tracker):
+    """`_render_pixel` with the path's buffers made. The scene and the buffers, which the caller keeps
+    alive, are borrowed (`_borrowed`): the loop below then updates no reference counts."""
+    ks, path, vertex, shadow, light, tracker = (_borrowed(ks), _borrowed(path), _borrowed(vertex),
+                                                _borrowed(shadow), _borrowed(light), _borrowed(tracker))
     n = ks.wavelengths_per_path
-    path = _new_path(media)
-    vertex, shadow = _new_coefficients(media), _new_coefficients(media)
-    light = _new_light_sample()
-    tracker = _new_tracker(media)
     path.stream[2] = pixel_key(seed, band, pixel)
     sx, sy, sz, qx, qy, qz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for sample in range(sample_begin, sample_end):
@@ -846,8 +852,7 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
     for index in prange(tile_width * tile_height):
         row, column = index // tile_width, index % tile_width
         px, py = x0 + column, y0 + row
-        sx, sy, sz, qx, qy, qz = _render_pixel(_borrowed(ks), px, py, py * ks.width + px, sample_begin,
-                                               sample_end, seed, band)
+        sx, sy, sz, qx, qy, qz = _render_pixel(ks, px, py, py * ks.width + px, sample_begin, sample_end, seed, band)
         sum_xyz[row, column, 0] += sx
         sum_xyz[row, column, 1] += sy
         sum_xyz[row, column, 2] += sz
