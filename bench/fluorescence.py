@@ -81,11 +81,15 @@ def slab_scene(source_thickness: float, pixels: int) -> Scene:
     return Scene(camera=camera, media=(medium,), lights=(light,), settings=RenderSettings(max_depth=64))
 
 
+FINE = np.arange(GRID[0], GRID[-1], 0.01)  # the ∫ dλ' of the closed form, over the linearly interpolated spectra
+
+
 def exact_y(source_thickness: float) -> float:
-    """The closed form of the module docstring, as luminance Y."""
-    uv_radiance = UV.values * UV_WATTS / UV.integral()
-    tau = EXCITATION.values * excitation_level(source_thickness) * THICKNESS
-    absorbed = float(np.sum(uv_radiance * (1.0 - 2.0 * expn(3, tau)) / 2.0))  # ∫ … dλ' on the 1 nm grid
+    """The closed form of the module docstring, as luminance Y (spectra interpolated linearly between grid
+    points, as the tracer does: at the excitation window's edges τ changes within a nanometre)."""
+    uv_radiance = np.interp(FINE, GRID, UV.values * UV_WATTS / UV.integral())
+    tau = np.interp(FINE, GRID, EXCITATION.values * excitation_level(source_thickness) * THICKNESS)
+    absorbed = float(np.sum(uv_radiance * (1.0 - 2.0 * expn(3, tau)) / 2.0) * (FINE[1] - FINE[0]))
     emitted = QUANTUM_YIELD * EMISSION.values / EMISSION.integral() * absorbed
     return float(colorimetry.spectrum_to_xyz(emitted)[1])
 

@@ -49,6 +49,19 @@ def pdf_binned(bin_pdf, lam):
 
 
 @shared
+def linear_over_binned(values, lam):
+    """At wavelength(s) `lam` in a bin of positive mean: the linear interpolation of `values` (a spectrum
+    on GRID) ÷ the bin's mean. `sample_binned` draws from the spectrum's bins with a constant density in
+    each bin; this weight turns such a draw into one from the interpolated spectrum itself (it differs from
+    1 only in bins where the spectrum changes, at the edges of a window, say)."""
+    x = lam - LAMBDA_MIN
+    i = np.int64(np.minimum(np.maximum(np.floor(x), 0.0), values.size - 2.0))
+    t = x - i
+    low, high = values[i], values[i + 1]
+    return (low + (high - low) * t) / (0.5 * (low + high))
+
+
+@shared
 def stratified_binned(cdf, bin_pdf, u, n):
     """Hero wavelength and n−1 rotated companions: u_i = (u + i/n) mod 1, λ_i = sample_binned(cdf, u_i).
 

@@ -13,7 +13,7 @@ from addon.tracer import binned, sampling
 from addon.tracer.colorimetry import xyz_weights
 from tests.support.statistics import chi_square_pvalue as counts_pvalue
 from addon.tracer.errors import SpectralError
-from addon.tracer.spectra import constant, gaussian, illuminant, table
+from addon.tracer.spectra import constant, gaussian, illuminant, table, window as spectra_window
 from addon.tracer.wavelengths import GRID
 
 P_MIN = 1e-3
@@ -252,3 +252,22 @@ def test_colour_importance_lowers_colour_noise_without_raising_luminance_noise(l
     assert colour.sum() < 0.8 * visible.sum()
     assert colour[2] < 0.6 * visible[2]  # Z: the blue lobe the visible density undersamples
     assert colour[1] < visible[1]
+
+
+def test_linear_over_binned_weights_binned_draws_to_the_interpolated_spectrum():
+    """Draws from a window's binned distribution (constant within each bin), weighted by
+    `linear_over_binned`, estimate integrals over the linearly interpolated spectrum: the share of each
+    half of the window's edge bins (a ramp from 0 to 1 within a nanometre: 1/4 and 3/4 of the bin's mass)
+    within 5 standard errors, and the weights average to 1."""
+    window = spectra_window(constant(1.0), 300, 340)
+    dist = sampling.from_spectrum(window, 250, 830)
+    u = (np.arange(400_000) + 0.5) / 400_000
+    lam = binned.sample_binned(dist.cdf, u)
+    weight = binned.linear_over_binned(window.values, lam)
+    total = window.integral()
+    for lo, expected in ((299.0, 0.125), (299.5, 0.375), (340.0, 0.375), (340.5, 0.125)):
+        inside = (lam >= lo) & (lam < lo + 0.5)
+        estimate = weight * inside
+        error = estimate.std() / np.sqrt(lam.size)
+        assert abs(estimate.mean() - expected / total) <= 5 * error + 1e-12, (lo, estimate.mean(), expected / total)
+    assert abs(weight.mean() - 1.0) < 1e-3

@@ -10,17 +10,21 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   majorant grid (a DDA over coarse blocks); at a tentative collision the hero picks a real collision
   (scattering weighted by the albedo), fluorescent in-scattering or a null collision in proportion
   to its coefficients.
-- Fluorescence is traced backwards: the camera wavelength λ_out switches to an excitation wavelength
-  λ_in drawn ∝ excitation(λ_in); only the hero continues (companions are dropped, their MIS share
-  goes to the hero).
+- Fluorescence is traced backwards, by branching: every tentative collision offers its fluorescent
+  source (σ_fl at each camera wavelength) to a one-slot weighted reservoir (`Fluorescent`), and the path
+  carries on by plain delta tracking, so no weight grows with the dye's density. When the path ends, a
+  fluorescent sub-path starts at the chosen collision: one wavelength λ_in drawn ∝ excitation(λ_in),
+  an isotropic direction; its radiance, times the reservoir's total weight and each camera wavelength's
+  share, is added to the path's. The sub-path's own reservoir gives the next (cascades, no recursion).
 - Next-event estimation at every real scattering vertex with ratio-tracked transmittance, combined
   with phase sampling by MIS for environment and finite suns.
 - Thermal emission σ_a·Planck(T) is collected at every tentative collision.
 
 Structure: `render_tile` runs pixels in parallel; `_render_pixel` runs a pixel's samples, each through
 the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `_camera_ray`, then transport
-(`_trace`: `_free_flight`, `_escape`, `_fluoresce`, `_next_event`, `_sample_phase`, `_survives_roulette`),
-then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`). Every
+(`_trace`: `_transport` with `_free_flight`, `_offer_fluorescence`, `_escape`, `_next_event`, `_sample_phase`,
+`_survives_roulette`; then `_start_fluorescent_branch` for each fluorescent sub-path),
+then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`). Every
 function below `_render_pixel` is inlined into it, and the kernel scene's arrays are borrowed
 (`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
 reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call.
@@ -35,7 +39,7 @@ from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from ..binned import pdf_binned, sample_binned
+from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
 from .layout import (
@@ -59,7 +63,7 @@ jit = functools.partial(njit, error_model="numpy")
 
 MAX_LAMBDAS = MAX_WAVELENGTHS_PER_PATH
 INF = np.inf
-EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
+EVENT_ESCAPE, EVENT_SCATTER, EVENT_ABSORB = 0, 1, 2
 # Rows of the per-path spectral cache spec[medium, row, wavelength] (filled when wavelengths change).
 SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO = 0, 1, 2, 3, 4
 SPEC_ROWS = 5
@@ -211,11 +215,10 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
     """Medium coefficients at a point for each path wavelength (summed over media), per-medium
     scattering / fluorescence coefficients (for choosing which medium scatters), and emission, into the
     `Coefficients` c."""
-    sigma_a, sigma_s, sigma_fl, emission, medium_s, medium_fl = c
+    sigma_a, sigma_s, emission, medium_s, medium_fl = c
     for i in range(n):
         sigma_a[i] = 0.0
         sigma_s[i] = 0.0
-        sigma_fl[i] = 0.0
         emission[i] = 0.0
     for m in range(ks.density_scale.shape[0]):
         rho = _density(ks, m, px, py, pz) * ks.density_scale[m]
@@ -234,7 +237,6 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
             medium_fl[m, i] = rho * ks.fluor_strength[m] * spec[m, SPEC_EMISSION_PDF, i]
             sigma_s[i] += scattering
             sigma_a[i] += plain_absorption + rho * spec[m, SPEC_EXCITATION, i]
-            sigma_fl[i] += medium_fl[m, i]
             if temperature > 0.0:
                 emission[i] += plain_absorption * ks.temperature_map[m, 2] * planck_radiance(lams[i], temperature)
 
@@ -500,12 +502,16 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
 # throughput, the MIS pdf ratios of unidirectional and light sampling, and the radiance collected.
 Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance")
 # Medium coefficients at a point (`_coefficients`): per wavelength summed over media, and per medium.
-Coefficients = namedtuple("Coefficients", "sigma_a sigma_s sigma_fl emission medium_s medium_fl")
+Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s medium_fl")
 # Next-event estimation's per-wavelength values: the light's radiance, the phase function, ratio-tracked
 # transmittance and null-event ratio, and the MIS sums.
 LightSample = namedtuple("LightSample", "radiance phase transmittance null_ratio r_l r_u")
 # One majorant DDA per medium (`_tracker_*`): integer and float state per medium.
 Tracker = namedtuple("Tracker", "state_i state_f")
+# The fluorescent branch (`_offer_fluorescence`): the reservoir's total weight, the chosen collision, each
+# camera wavelength's share of its weight, its medium and depth; the radiance collected so far and the
+# factor of each camera wavelength for the sub-path being traced.
+Fluorescent = namedtuple("Fluorescent", "total point share medium radiance scale")
 
 
 @jit(inline="always")
@@ -517,7 +523,7 @@ def _new_path(media):
 
 @jit(inline="always")
 def _new_coefficients(media):
-    return Coefficients(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
+    return Coefficients(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
                         np.zeros((media, MAX_LAMBDAS)), np.zeros((media, MAX_LAMBDAS)))
 
 
@@ -525,6 +531,12 @@ def _new_coefficients(media):
 def _new_light_sample():
     return LightSample(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
                        np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS))
+
+
+@jit(inline="always")
+def _new_fluorescent():
+    return Fluorescent(np.zeros(1), np.zeros(3), np.zeros(MAX_LAMBDAS), np.zeros(2, dtype=np.int64),
+                       np.zeros(MAX_LAMBDAS), np.zeros(MAX_LAMBDAS))
 
 
 @jit(inline="always")
@@ -587,7 +599,7 @@ def _path_xyz(ks, n, path):
 @jit(inline="always")
 def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker):
     """Ratio tracking along a shadow ray: fills `light.transmittance` (per λ) and `light.null_ratio`, the
-    product of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) per λ (for MIS); `shadow` holds
+    product of the unidirectional null-event probabilities σ_n/σ̄ per λ (for MIS); `shadow` holds
     the coefficients along the ray."""
     transmittance, null_ratio = light.transmittance, light.null_ratio
     for i in range(n):
@@ -604,7 +616,7 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tr
         for i in range(n):
             sigma_n = max(0.0, sigma_bar - shadow.sigma_a[i] - shadow.sigma_s[i])
             transmittance[i] *= sigma_n / sigma_bar
-            null_ratio[i] *= sigma_n / (sigma_bar + shadow.sigma_fl[i])
+            null_ratio[i] *= sigma_n / sigma_bar
             largest = max(largest, transmittance[i])
         if largest == 0.0:
             return
@@ -657,12 +669,32 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, shadow, 
 
 
 @jit(inline="always")
-def _free_flight(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, tracker):
-    """Delta tracking to the next real event, collecting thermal emission at every tentative collision and
-    weighting null collisions (spectral MIS ratios included). Returns (event, collision point, σ̄ there);
-    `vertex` keeps the coefficients at a scattering or fluorescent collision."""
+def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, vertex, fl):
+    """Offer each medium's fluorescent source at a tentative collision to the reservoir `fl`: its weight
+    Σ_i β_i σ_fl,i / (σ̄ · mean r_u) (the collision estimator of a source, as for thermal emission), kept
+    with probability weight ÷ total weight so far."""
+    for m in range(ks.density_scale.shape[0]):
+        source = 0.0
+        for i in range(n):
+            source += path.beta[i] * vertex.medium_fl[m, i]
+        if source <= 0.0:
+            continue
+        weight = source / (sigma_bar * mean_r_u)
+        fl.total[0] += weight
+        if _next(path.stream) * fl.total[0] < weight:
+            fl.point[0], fl.point[1], fl.point[2] = qx, qy, qz
+            fl.medium[0], fl.medium[1] = m, depth + 1
+            for i in range(n):
+                fl.share[i] = path.beta[i] * vertex.medium_fl[m, i] / source
+
+
+@jit(inline="always")
+def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, n, path, vertex, tracker, fl):
+    """Delta tracking to the next real event, collecting thermal emission and offering fluorescent sources
+    at every tentative collision and weighting null collisions (spectral MIS ratios included). Returns
+    (event, collision point, σ̄ there); `vertex` keeps the coefficients at a scattering collision."""
     beta, r_u, r_l = path.beta, path.r_u, path.r_l
-    sigma_a, sigma_s, sigma_fl = vertex.sigma_a, vertex.sigma_s, vertex.sigma_fl
+    sigma_a, sigma_s = vertex.sigma_a, vertex.sigma_s
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, tracker)
     t = 0.0
     while True:
@@ -675,28 +707,25 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, tracker):
         for i in range(n):
             if vertex.emission[i] > 0.0:
                 path.radiance[i] += beta[i] * vertex.emission[i] / (sigma_bar * mean_r_u)
-        total = sigma_bar + sigma_fl[0]
-        sigma_n0 = max(0.0, sigma_bar - sigma_a[0] - sigma_s[0])
-        choice = _next(path.stream) * total
+        _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, vertex, fl)
+        choice = _next(path.stream) * sigma_bar
         if choice < sigma_a[0] + sigma_s[0]:
             # A real collision scatters, weighted by the albedo: absorption lowers the throughput
             # instead of ending the path (Russian roulette ends faint paths).
-            probability0 = (sigma_a[0] + sigma_s[0]) / total
+            probability0 = (sigma_a[0] + sigma_s[0]) / sigma_bar
             alive = False
             for i in range(n):
                 beta[i] *= sigma_s[i] / sigma_bar / probability0
-                r_u[i] *= (sigma_a[i] + sigma_s[i]) / (sigma_bar + sigma_fl[i]) / probability0
+                r_u[i] *= (sigma_a[i] + sigma_s[i]) / sigma_bar / probability0
                 if beta[i] > 0.0:
                     alive = True
             return (EVENT_SCATTER if alive else EVENT_ABSORB), qx, qy, qz, sigma_bar
-        if choice < sigma_a[0] + sigma_s[0] + sigma_fl[0]:
-            return EVENT_FLUORESCE, qx, qy, qz, sigma_bar
-        probability0 = sigma_n0 / total
+        probability0 = max(0.0, sigma_bar - sigma_a[0] - sigma_s[0]) / sigma_bar
         alive = False
         for i in range(n):
             sigma_n = max(0.0, sigma_bar - sigma_a[i] - sigma_s[i])
             beta[i] *= sigma_n / sigma_bar / probability0
-            r_u[i] *= sigma_n / (sigma_bar + sigma_fl[i]) / probability0
+            r_u[i] *= sigma_n / sigma_bar / probability0
             r_l[i] /= probability0
             if beta[i] > 0.0:
                 alive = True
@@ -723,17 +752,18 @@ def _escape(ks, dx, dy, dz, scattered, n, path, light):
 
 
 @jit(inline="always")
-def _fluoresce(ks, sigma_bar, n, path, vertex):
-    """Backward fluorescence: the hero's wavelength becomes an excitation wavelength drawn ∝ excitation
-    of the medium that fluoresced; the companions are dropped."""
-    medium = _pick_medium(vertex.medium_fl, 0, _next(path.stream))
-    path.beta[0] *= (sigma_bar + vertex.sigma_fl[0]) / sigma_bar
+def _start_fluorescent_branch(ks, path, fl):
+    """A one-wavelength sub-path at the reservoir's collision: λ_in drawn ∝ the excitation of the medium
+    that fluoresces (binned, then weighted to the interpolated spectrum), fresh weights, and an empty
+    reservoir for its own fluorescent sources."""
+    medium = fl.medium[0]
     path.lams[0] = sample_binned(ks.excitation_cdf[medium], _next(path.stream))
-    for i in range(1, n):
-        path.beta[i] = 0.0
-        path.r_u[i] = 0.0
-        path.r_l[i] = 0.0
-    _fill_spectral_cache(ks, path.lams, n, path.spec)
+    path.beta[0] = linear_over_binned(ks.excitation[medium], path.lams[0])
+    path.r_u[0] = 1.0
+    path.r_l[0] = 1.0
+    path.radiance[0] = 0.0
+    _fill_spectral_cache(ks, path.lams, 1, path.spec)
+    fl.total[0] = 0.0
 
 
 @jit(inline="always")
@@ -786,12 +816,24 @@ def _survives_roulette(ks, depth, n, path):
 
 
 @jit(inline="always")
-def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker):
-    """Transport of one path from a camera ray: collects its radiance per wavelength in `path.radiance`."""
-    depth = 0
-    scattered = False
+def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, shadow, light, tracker, fl):
+    """Transport from a camera ray, or (`emitted`) from an isotropic fluorescent emission at (ox, oy, oz)
+    at vertex `depth`: collects the radiance per wavelength in `path.radiance` and offers fluorescent
+    sources to `fl`."""
+    scattered = emitted
+    at_vertex = emitted
     while True:
-        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, tracker)
+        if at_vertex:
+            if ks.light_kind.shape[0] > 0:
+                _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, n, path, vertex, shadow, light, tracker)
+            dx, dy, dz = _sample_phase(ks, dx, dy, dz, emitted, n, path, vertex, light)
+            if dx == 0.0 and dy == 0.0 and dz == 0.0:
+                return
+            scattered = True
+            emitted = False
+            if not _survives_roulette(ks, depth, n, path):
+                return
+        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, n, path, vertex, tracker, fl)
         if event == EVENT_ABSORB:
             return
         if event == EVENT_ESCAPE:
@@ -801,17 +843,28 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker):
         if depth > ks.max_depth:
             return
         ox, oy, oz = qx, qy, qz
-        isotropic = event == EVENT_FLUORESCE
-        if isotropic:
-            _fluoresce(ks, sigma_bar, n, path, vertex)
-        if ks.light_kind.shape[0] > 0:
-            _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, shadow, light, tracker)
-        dx, dy, dz = _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light)
-        if dx == 0.0 and dy == 0.0 and dz == 0.0:
-            return
-        scattered = True
-        if not _survives_roulette(ks, depth, n, path):
-            return
+        at_vertex = True
+
+
+@jit(inline="always")
+def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, fl):
+    """Transport of one path from a camera ray, then its fluorescent sub-paths: collects its radiance per
+    camera wavelength in `path.radiance`."""
+    fl.total[0] = 0.0
+    _transport(ks, ox, oy, oz, dx, dy, dz, 0, False, n, path, vertex, shadow, light, tracker, fl)
+    for i in range(n):
+        fl.radiance[i] = path.radiance[i]
+        fl.scale[i] = fl.total[0] * fl.share[i]
+    while fl.total[0] > 0.0 and fl.medium[1] <= ks.max_depth:
+        depth = fl.medium[1]
+        _start_fluorescent_branch(ks, path, fl)
+        _transport(ks, fl.point[0], fl.point[1], fl.point[2], 0.0, 0.0, 1.0, depth, True, 1, path, vertex, shadow,
+                   light, tracker, fl)
+        for i in range(n):
+            fl.radiance[i] += fl.scale[i] * path.radiance[0]
+            fl.scale[i] *= fl.total[0]
+    for i in range(n):
+        path.radiance[i] = fl.radiance[i]
 
 
 @jit
@@ -819,15 +872,18 @@ def _render_pixel(ks, px, py, pixel, sample_begin, sample_end, seed, band):
     """Samples [sample_begin, sample_end) of one pixel: (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z²)."""
     media = max(ks.density_scale.shape[0], 1)
     return _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, _new_path(media),
-                           _new_coefficients(media), _new_coefficients(media), _new_light_sample(), _new_tracker(media))
+                           _new_coefficients(media), _new_coefficients(media), _new_light_sample(), _new_tracker(media),
+                           _new_fluorescent())
 
 
 @jit
-def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, shadow, light, tracker):
+def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, shadow, light, tracker,
+                    fl):
     """`_render_pixel` with the path's buffers made. The scene and the buffers, which the caller keeps
     alive, are borrowed (`_borrowed`): the loop below then updates no reference counts."""
-    ks, path, vertex, shadow, light, tracker = (_borrowed(ks), _borrowed(path), _borrowed(vertex),
-                                                _borrowed(shadow), _borrowed(light), _borrowed(tracker))
+    ks, path, vertex, shadow, light, tracker, fl = (_borrowed(ks), _borrowed(path), _borrowed(vertex),
+                                                    _borrowed(shadow), _borrowed(light), _borrowed(tracker),
+                                                    _borrowed(fl))
     n = ks.wavelengths_per_path
     path.stream[2] = pixel_key(seed, band, pixel)
     sx, sy, sz, qx, qy, qz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -837,7 +893,7 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
         path.stream[3] = sample
         _sample_wavelengths(ks, n, path)
         ox, oy, oz, dx, dy, dz = _camera_ray(ks, px, py, path.stream)
-        _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker)
+        _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, fl)
         x, y, z = _path_xyz(ks, n, path)
         sx, sy, sz = sx + x, sy + y, sz + z
         qx, qy, qz = qx + x * x, qy + y * y, qz + z * z

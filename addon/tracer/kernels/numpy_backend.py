@@ -19,7 +19,7 @@ which can send a path down another branch). Masked lanes may compute values that
 
 import numpy as np
 
-from ..binned import pdf_binned, sample_binned
+from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
 from ..wavelengths import GRID, LAMBDA_MIN
@@ -38,31 +38,35 @@ from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_ke
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
 INF = np.inf
 INV_FOUR_PI = 0.25 / np.pi
-EVENT_ESCAPE, EVENT_SCATTER, EVENT_FLUORESCE, EVENT_ABSORB = 0, 1, 2, 3
+EVENT_ESCAPE, EVENT_SCATTER, EVENT_ABSORB = 0, 1, 2
 
 
 class _Batch:
-    """A struct of arrays with one row per path (or ray); `take` keeps some rows, in a new batch."""
+    """A struct of arrays with one row per path (or ray); `take` keeps some rows, in a new batch. A member
+    that is not an array (`stream`: state shared by every batch of the same paths) is kept as it is."""
 
     def __init__(self, **arrays):
         vars(self).update(arrays)
 
     def take(self, rows):
-        return _Batch(**{name: array[rows] for name, array in vars(self).items()})
+        return _Batch(**{name: array[rows] if isinstance(array, np.ndarray) else array
+                         for name, array in vars(self).items()})
 
     def __len__(self):
         return len(next(iter(vars(self).values())))
 
 
 def _draw(paths, rows=slice(None)):
-    """The next uniform number of each selected path's stream (`paths.key`, `paths.counter`, and
-    `paths.pixel_key`, `paths.sample` for the low-discrepancy dimensions; `rng`)."""
-    counter = paths.counter[rows]
-    u = uniform(paths.key[rows], counter)
+    """The next uniform number of each selected path's stream (`paths.stream`, indexed by path id: key,
+    counter, and pixel key and sample for the low-discrepancy dimensions; `rng`). A path's fluorescent
+    sub-paths go on drawing from its stream."""
+    ids, stream = paths.id[rows], paths.stream
+    counter = stream.counter[ids]
+    u = uniform(stream.key[ids], counter)
     low = np.flatnonzero(counter < LOW_DISCREPANCY_DIMENSIONS)
     if low.size:
-        u[low] = low_discrepancy(paths.pixel_key[rows][low], paths.sample[rows][low], counter[low])
-    paths.counter[rows] += np.uint64(1)
+        u[low] = low_discrepancy(stream.pixel_key[ids[low]], stream.sample[ids[low]], counter[low])
+    stream.counter[ids] += np.uint64(1)
     return u
 
 
@@ -185,7 +189,7 @@ def _coefficients(ks, points, lams):
     per-medium scattering and fluorescence coefficients (which medium scatters); thermal emission."""
     count, n = lams.shape
     media = ks.density_scale.shape[0]
-    out = _Batch(sigma_a=np.zeros((count, n)), sigma_s=np.zeros((count, n)), sigma_fl=np.zeros((count, n)),
+    out = _Batch(sigma_a=np.zeros((count, n)), sigma_s=np.zeros((count, n)),
                  emission=np.zeros((count, n)), medium_s=np.zeros((count, media, n)),
                  medium_fl=np.zeros((count, media, n)))
     for m in range(media):
@@ -203,7 +207,6 @@ def _coefficients(ks, points, lams):
         out.medium_fl[rows, m] = fluorescence
         out.sigma_s[rows] += scattering
         out.sigma_a[rows] += plain_absorption + r * _table(ks.excitation[m], at)
-        out.sigma_fl[rows] += fluorescence
         if ks.temperature_offset[m] >= 0:
             temperature = _temperature(ks, m, points[rows])[:, None]
             glow = plain_absorption * ks.temperature_map[m, 2] * planck_radiance(lam, temperature)
@@ -464,8 +467,9 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
     wavelengths (hero and stratified companions) and camera rays. Returns the path batch and the camera
     wavelengths with their pdfs."""
     count, n = samples.shape[0], ks.wavelengths_per_path
-    paths = _Batch(id=np.arange(count), key=path_key(pixel_keys, samples), pixel_key=pixel_keys,
-                   sample=samples, counter=np.zeros(count, dtype=np.uint64),
+    stream = _Batch(key=path_key(pixel_keys, samples), counter=np.zeros(count, dtype=np.uint64), pixel_key=pixel_keys,
+                    sample=samples)
+    paths = _Batch(id=np.arange(count), stream=stream,
                    lams=np.empty((count, n)), beta=np.ones((count, n)), r_u=np.ones((count, n)),
                    r_l=np.ones((count, n)), o=np.zeros((count, 3)), d=np.zeros((count, 3)),
                    depth=np.zeros(count, dtype=np.int64), scattered=np.zeros(count, dtype=bool))
@@ -491,50 +495,65 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
     return paths, lam_cam, pdf_cam
 
 
-def _free_flight(ks, paths, radiance):
-    """Delta tracking of every path to its next real event, collecting thermal emission at each
-    tentative collision and weighting null collisions (spectral MIS ratios included).
+def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
+    """Offer each medium's fluorescent source at the tentative collisions of paths `rows` to their
+    reservoirs `fl` (indexed by path id), as the Numba kernel's `_offer_fluorescence`."""
+    ids = paths.id[rows]
+    beta = paths.beta[rows]
+    for m in range(ks.density_scale.shape[0]):
+        source = np.zeros(rows.size)
+        for i in range(beta.shape[1]):  # summed in order, as in the Numba kernel
+            source = source + beta[:, i] * c.medium_fl[:, m, i]
+        offering = np.flatnonzero(source > 0.0)
+        if not offering.size:
+            continue
+        weight = source[offering] / (sigma_bar[offering] * mean_r_u[offering])
+        fl.total[ids[offering]] += weight
+        kept = offering[_draw(paths, rows[offering]) * fl.total[ids[offering]] < weight]
+        fl.point[ids[kept]] = points[kept]
+        fl.medium[ids[kept]] = m
+        fl.depth[ids[kept]] = paths.depth[rows[kept]] + 1
+        fl.share[ids[kept], :beta.shape[1]] = beta[kept] * c.medium_fl[kept, m] / source[kept, None]
 
-    Returns each path's event and the vertex data of real events (position q, σ̄, the hero's σ_fl and
-    the per-medium σ_s, σ_fl at q)."""
+
+def _free_flight(ks, paths, radiance, fl):
+    """Delta tracking of every path to its next real event, collecting thermal emission and offering
+    fluorescent sources at each tentative collision and weighting null collisions (spectral MIS ratios
+    included).
+
+    Returns each path's event and the vertex data of scattering events (position q and the per-medium
+    σ_s at q)."""
     count, n = paths.lams.shape
     media = ks.density_scale.shape[0]
     vertex = _Batch(event=np.full(count, EVENT_ESCAPE, dtype=np.int8), q=np.zeros((count, 3)),
-                    sigma_bar=np.zeros(count), sigma_fl0=np.zeros(count),
-                    medium_s=np.zeros((count, media, n)), medium_fl=np.zeros((count, media, n)))
+                    medium_s=np.zeros((count, media, n)))
 
     def collide(rows, points, sigma_bar):
         c = _coefficients(ks, points, paths.lams[rows])
         beta, r_u, r_l = paths.beta[rows], paths.r_u[rows], paths.r_l[rows]
         bar = sigma_bar[:, None]
-        mean_r_u = _mean(r_u)[:, None]
-        radiance[paths.id[rows]] += np.where(c.emission > 0.0, beta * c.emission / (bar * mean_r_u), 0.0)
-        total = sigma_bar + c.sigma_fl[:, 0]
+        mean_r_u = _mean(r_u)
+        radiance[paths.id[rows]] += np.where(c.emission > 0.0, beta * c.emission / (bar * mean_r_u[:, None]), 0.0)
+        _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl)
         sigma_n = np.maximum(0.0, bar - c.sigma_a - c.sigma_s)
-        choice = _draw(paths, rows) * total
+        choice = _draw(paths, rows) * sigma_bar
         sigma_t = c.sigma_a + c.sigma_s
         # A real collision scatters, weighted by the albedo (as in the Numba kernel).
         collided = choice < sigma_t[:, 0]
-        fluoresced = ~collided & (choice < sigma_t[:, 0] + c.sigma_fl[:, 0])
-        null = ~(collided | fluoresced)
-        p0 = np.where(collided, sigma_t[:, 0], sigma_n[:, 0])[:, None] / total[:, None]
+        null = ~collided
+        p0 = np.where(collided, sigma_t[:, 0], sigma_n[:, 0])[:, None] / bar
         beta = np.where(collided[:, None], beta * (c.sigma_s / bar / p0), beta)
-        r_u = np.where(collided[:, None], r_u * (sigma_t / (bar + c.sigma_fl) / p0), r_u)
+        r_u = np.where(collided[:, None], r_u * (sigma_t / bar / p0), r_u)
         beta = np.where(null[:, None], beta * (sigma_n / bar / p0), beta)
-        r_u = np.where(null[:, None], r_u * (sigma_n / (bar + c.sigma_fl) / p0), r_u)
+        r_u = np.where(null[:, None], r_u * (sigma_n / bar / p0), r_u)
         r_l = np.where(null[:, None], r_l / p0, r_l)
         paths.beta[rows], paths.r_u[rows], paths.r_l[rows] = beta, r_u, r_l
         alive = np.any(beta > 0.0, axis=1)
-        dead = null & ~alive
         scattered = collided & alive
-        event = np.where(scattered, EVENT_SCATTER, np.where(fluoresced, EVENT_FLUORESCE, EVENT_ABSORB))
-        stop = ~null | dead
-        real = scattered | fluoresced
-        vertex.event[rows[stop]] = event[stop]
-        keep = rows[real]
-        vertex.q[keep], vertex.sigma_bar[keep], vertex.sigma_fl0[keep] = \
-            points[real], sigma_bar[real], c.sigma_fl[real, 0]
-        vertex.medium_s[keep], vertex.medium_fl[keep] = c.medium_s[real], c.medium_fl[real]
+        stop = collided | ~alive
+        vertex.event[rows[stop]] = np.where(scattered, EVENT_SCATTER, EVENT_ABSORB)[stop]
+        keep = rows[scattered]
+        vertex.q[keep], vertex.medium_s[keep] = points[scattered], c.medium_s[scattered]
         return stop
 
     _track(ks, paths, np.arange(count), paths.o, paths.d, INF, collide)
@@ -553,20 +572,6 @@ def _escape(ks, paths, radiance):
         radiance[paths.id] += paths.beta * light_radiance / mean_r[:, None]
 
 
-def _fluoresce(ks, paths, vertex, rows):
-    """Backward fluorescence at the vertices `rows`: the hero's wavelength becomes an excitation
-    wavelength drawn ∝ excitation of the medium that fluoresced; the companions are dropped."""
-    medium = _pick_medium(vertex.medium_fl[rows, :, 0], _draw(paths, rows))
-    paths.beta[rows, 0] *= (vertex.sigma_bar[rows] + vertex.sigma_fl0[rows]) / vertex.sigma_bar[rows]
-    u = _draw(paths, rows)
-    for m in range(ks.density_scale.shape[0]):
-        chosen = medium == m
-        paths.lams[rows[chosen], 0] = sample_binned(ks.excitation_cdf[m], u[chosen])
-    paths.beta[rows, 1:] = 0.0
-    paths.r_u[rows, 1:] = 0.0
-    paths.r_l[rows, 1:] = 0.0
-
-
 def _transmittance(ks, paths, rows, origins, directions, t_max, lams):
     """Ratio tracking along shadow rays (ray k from path rows[k]): the transmittance per wavelength and
     the product of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) (for MIS). Faint rays
@@ -579,7 +584,7 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams):
         bar = sigma_bar[:, None]
         sigma_n = np.maximum(0.0, bar - c.sigma_a - c.sigma_s)
         transmittance[rays] *= sigma_n / bar
-        null_ratio[rays] *= sigma_n / (bar + c.sigma_fl)
+        null_ratio[rays] *= sigma_n / bar
         largest = np.max(transmittance[rays], axis=1, initial=0.0)
         faint = np.flatnonzero((largest > 0.0) & (largest < SHADOW_ROULETTE_BELOW))
         lost = _draw(paths, rows[rays[faint]]) < SHADOW_ROULETTE_STOP
@@ -655,22 +660,9 @@ def _roulette(ks, paths):
     return keep
 
 
-def _bounce(ks, paths, radiance):
-    """Every live path to its next scattering vertex and past it; returns the paths still alive."""
-    vertex = _free_flight(ks, paths, radiance)
-    escaped = vertex.event == EVENT_ESCAPE
-    if escaped.any():
-        _escape(ks, paths.take(escaped), radiance)
-    real = (vertex.event == EVENT_SCATTER) | (vertex.event == EVENT_FLUORESCE)
-    real &= paths.depth + 1 <= ks.max_depth
-    paths, vertex = paths.take(real), vertex.take(real)
-    if not len(paths):
-        return paths
-    paths.depth += 1
-    paths.o = vertex.q
-    isotropic = vertex.event == EVENT_FLUORESCE
-    if isotropic.any():
-        _fluoresce(ks, paths, vertex, np.flatnonzero(isotropic))
+def _scatter(ks, paths, vertex, isotropic, radiance):
+    """Next-event estimation and phase sampling at every path's vertex (isotropic where `isotropic`), then
+    Russian roulette; returns the paths still alive."""
     if ks.light_kind.shape[0] > 0:
         _next_event(ks, paths, vertex, isotropic, radiance)
     keep = _sample_phase(ks, paths, vertex, isotropic)
@@ -678,20 +670,69 @@ def _bounce(ks, paths, radiance):
     return paths.take(_roulette(ks, paths))
 
 
+def _bounce(ks, paths, radiance, fl):
+    """Every live path to its next scattering vertex and past it; returns the paths still alive."""
+    vertex = _free_flight(ks, paths, radiance, fl)
+    escaped = vertex.event == EVENT_ESCAPE
+    if escaped.any():
+        _escape(ks, paths.take(escaped), radiance)
+    real = (vertex.event == EVENT_SCATTER) & (paths.depth + 1 <= ks.max_depth)
+    paths, vertex = paths.take(real), vertex.take(real)
+    if not len(paths):
+        return paths
+    paths.depth += 1
+    paths.o = vertex.q
+    return _scatter(ks, paths, vertex, np.zeros(len(paths), dtype=bool), radiance)
+
+
+def _fluorescent_paths(ks, stream, ids, fl):
+    """One-wavelength sub-paths from the reservoirs' collisions of paths `ids` (as the Numba kernel's
+    `_start_fluorescent_branch`): λ_in drawn ∝ the excitation of the medium that fluoresces, fresh
+    weights, empty reservoirs; each emits isotropically (`_scatter`)."""
+    count = ids.size
+    paths = _Batch(id=ids, stream=stream, lams=np.zeros((count, 1)), beta=np.ones((count, 1)),
+                   r_u=np.ones((count, 1)), r_l=np.ones((count, 1)), o=fl.point[ids],
+                   d=np.tile([0.0, 0.0, 1.0], (count, 1)), depth=fl.depth[ids].copy(),
+                   scattered=np.ones(count, dtype=bool))
+    u = _draw(paths)
+    for m in range(ks.density_scale.shape[0]):
+        chosen = fl.medium[ids] == m
+        paths.lams[chosen, 0] = sample_binned(ks.excitation_cdf[m], u[chosen])
+        paths.beta[chosen, 0] = linear_over_binned(ks.excitation[m], paths.lams[chosen, 0])
+    fl.total[ids] = 0.0
+    return paths
+
+
 def _trace(ks, px, py, pixel_keys, samples):
-    """XYZ estimates (paths, 3) of one camera path per sample, through pixels (px, py) keyed `pixel_keys`."""
+    """XYZ estimates (paths, 3) of one camera path per sample, through pixels (px, py) keyed `pixel_keys`:
+    the camera paths, then rounds of fluorescent sub-paths (the Numba kernel's `_trace`)."""
     paths, lam_cam, pdf_cam = _camera_paths(ks, px, py, pixel_keys, samples)
-    radiance = np.zeros(lam_cam.shape)
+    count, n = lam_cam.shape
+    stream = paths.stream
+    fl = _Batch(total=np.zeros(count), point=np.zeros((count, 3)), share=np.zeros((count, n)),
+                medium=np.zeros(count, dtype=np.int64), depth=np.zeros(count, dtype=np.int64))
+    radiance = np.zeros((count, n))
     while len(paths):
-        paths = _bounce(ks, paths, radiance)
-    n = lam_cam.shape[1]
+        paths = _bounce(ks, paths, radiance, fl)
+    scale = fl.total[:, None] * fl.share
+    ids = np.flatnonzero((fl.total > 0.0) & (fl.depth <= ks.max_depth))
+    while ids.size:
+        paths = _fluorescent_paths(ks, stream, ids, fl)
+        emitted = np.zeros((count, 1))
+        paths = _scatter(ks, paths, _Batch(medium_s=np.zeros((ids.size, ks.density_scale.shape[0], 1))),
+                         np.ones(ids.size, dtype=bool), emitted)
+        while len(paths):
+            paths = _bounce(ks, paths, emitted, fl)
+        radiance[ids] += scale[ids] * emitted[ids]
+        scale[ids] *= fl.total[ids, None]
+        ids = ids[(fl.total[ids] > 0.0) & (fl.depth[ids] <= ks.max_depth)]
     xyz = np.zeros((samples.shape[0], 3))
     for i in range(n):
         counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
-        scale = radiance[:, i] / (pdf_cam[:, i] * n)
+        scale_i = radiance[:, i] / (pdf_cam[:, i] * n)
         at = _at(lam_cam[:, i])
         for c in range(3):
-            xyz[:, c] += np.where(counted, scale * _table(ks.xyz_weights[c], at), 0.0)
+            xyz[:, c] += np.where(counted, scale_i * _table(ks.xyz_weights[c], at), 0.0)
     return xyz
 
 
