@@ -674,6 +674,8 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
     Σ_i β_i σ_fl,i / (σ̄ · mean r_u) (the collision estimator of a source, as for thermal emission), kept
     with probability weight ÷ total weight so far."""
     for m in range(ks.density_scale.shape[0]):
+        if ks.fluor_strength[m] <= 0.0:  # no dye: nothing to offer, and the tracking loop stays lean
+            continue
         source = 0.0
         for i in range(n):
             source += path.beta[i] * vertex.medium_fl[m, i]

@@ -501,6 +501,8 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
     ids = paths.id[rows]
     beta = paths.beta[rows]
     for m in range(ks.density_scale.shape[0]):
+        if ks.fluor_strength[m] <= 0.0:  # no dye: nothing to offer
+            continue
         source = np.zeros(rows.size)
         for i in range(beta.shape[1]):  # summed in order, as in the Numba kernel
             source = source + beta[:, i] * c.medium_fl[:, m, i]

@@ -26,7 +26,7 @@ _S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(
 _UNIT = 1.0 / 9007199254740992.0  # 2⁻⁵³
 _UNIT32 = 1.0 / 4294967296.0  # 2⁻³²
 _LOW32 = np.uint64(0xFFFFFFFF)
-_S1, _S2, _S4, _S8, _S16, _S32 = (np.uint64(s) for s in (1, 2, 4, 8, 16, 32))
+_S1, _S2, _S4, _S8, _S16, _S24, _S32 = (np.uint64(s) for s in (1, 2, 4, 8, 16, 24, 32))
 _ODD1, _ODD2, _ODD4, _ODD8 = (np.uint64(m) for m in (0x55555555, 0x33333333, 0x0F0F0F0F, 0x00FF00FF))
 # Even multipliers of the hash-based nested uniform scramble (Burley 2020, after Laine and Karras):
 # bit k of the result depends only on bits 0..k of the input, which makes the scramble nested.
@@ -76,7 +76,6 @@ def _byte_tables(matrices: np.ndarray) -> np.ndarray:
 
 SOBOL_BYTES = _byte_tables(SOBOL_MATRICES)
 _BYTE = np.uint64(0xFF)
-_S24 = np.uint64(24)
 
 
 @shared
