@@ -45,6 +45,7 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
         "density_scale": np.array([m.density_scale for m in media], dtype=np.float64),
         "extinction": np.array([m.extinction.values for m in media]).reshape(count, GRID.size),
         "excitation": np.zeros((count, GRID.size)),
+        "excitation_mean": np.zeros(count),
         "anisotropy": np.array([m.anisotropy.values for m in media]).reshape(count, GRID.size),
         "phase_kind": np.array([PHASES.index(m.phase) for m in media], dtype=np.int64),
         "albedo_densities": np.zeros((count, levels)),
@@ -68,6 +69,7 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
             total = fluorescence.excitation.integral()
             emission_total = fluorescence.emission.integral()
             out["fluor_strength"][index] = fluorescence.quantum_yield * total
+            out["excitation_mean"][index] = np.trapezoid(fluorescence.excitation.values ** 2, GRID) / total
             out["emission_pdf"][index] = fluorescence.emission.values / emission_total
             excitation = sampling.from_spectrum(fluorescence.excitation, LAMBDA_MIN, LAMBDA_MAX)
             out["excitation_cdf"][index] = excitation.cdf

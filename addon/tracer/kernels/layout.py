@@ -53,6 +53,7 @@ class KernelScene(NamedTuple):
     density_scale: np.ndarray  # (M,)
     extinction: np.ndarray  # (M, GRID)
     excitation: np.ndarray  # (M, GRID) fluorophore absorption per unit density
+    excitation_mean: np.ndarray  # (M,) ∫excitation² / ∫excitation: a typical λ_in's absorption (reservoir guide)
     anisotropy: np.ndarray  # (M, GRID)
     phase_kind: np.ndarray  # (M,)
     albedo_densities: np.ndarray  # (M, Lmax)

@@ -11,11 +11,12 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   (scattering weighted by the albedo), fluorescent in-scattering or a null collision in proportion
   to its coefficients.
 - Fluorescence is traced backwards, by branching: every tentative collision offers its fluorescent
-  source (σ_fl at each camera wavelength) to a one-slot weighted reservoir (`Fluorescent`), and the path
-  carries on by plain delta tracking, so no weight grows with the dye's density. When the path ends, a
-  fluorescent sub-path starts at the chosen collision: one wavelength λ_in drawn ∝ excitation(λ_in),
-  an isotropic direction; its radiance, times the reservoir's total weight and each camera wavelength's
-  share, is added to the path's. The sub-path's own reservoir gives the next (cascades, no recursion).
+  source (σ_fl at each camera wavelength) to three weighted one-slot reservoirs (`Fluorescent`, guided
+  by the dye's optical depth: `fluorescent_reservoir`), and the path carries on by plain delta tracking,
+  so no weight grows with the dye's density. When the path ends, a fluorescent sub-path starts at one
+  reservoir's collision: one wavelength λ_in drawn ∝ excitation(λ_in), an isotropic direction; its
+  radiance, times the collision's weight ÷ its mixture probability and each camera wavelength's share,
+  is added to the path's. The sub-path's own reservoirs give the next (cascades, no recursion).
 - Next-event estimation at every real scattering vertex with ratio-tracked transmittance, combined
   with phase sampling by MIS for environment and finite suns.
 - Thermal emission σ_a·Planck(T) is collected at every tentative collision.
@@ -42,6 +43,7 @@ from numba.extending import intrinsic
 from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
+from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .layout import (
     CAMERA_PERSPECTIVE,
     LIGHT_ENVIRONMENT,
@@ -215,13 +217,16 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
     """Medium coefficients at a point for each path wavelength (summed over media), per-medium
     scattering / fluorescence coefficients (for choosing which medium scatters), and emission, into the
     `Coefficients` c."""
-    sigma_a, sigma_s, emission, medium_s, medium_fl = c
+    sigma_a, sigma_s, emission, medium_s, medium_fl, dye = c
     for i in range(n):
         sigma_a[i] = 0.0
         sigma_s[i] = 0.0
         emission[i] = 0.0
+    dye[0] = 0.0
     for m in range(ks.density_scale.shape[0]):
         rho = _density(ks, m, px, py, pz) * ks.density_scale[m]
+        if rho > 0.0:
+            dye[0] += rho * ks.excitation_mean[m]
         temperature = _temperature(ks, m, px, py, pz) if ks.temperature_offset[m] >= 0 and rho > 0 else 0.0
         for i in range(n):
             if rho <= 0.0:
@@ -501,17 +506,19 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
 # wavelengths (the hero changes at fluorescence), the media's spectra at them (`_fill_spectral_cache`),
 # throughput, the MIS pdf ratios of unidirectional and light sampling, and the radiance collected.
 Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance")
-# Medium coefficients at a point (`_coefficients`): per wavelength summed over media, and per medium.
-Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s medium_fl")
+# Medium coefficients at a point (`_coefficients`): per wavelength summed over media, and per medium;
+# `dye` holds the dyes' absorption at their mean excitation (`fluorescent_reservoir`'s optical depth).
+Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s medium_fl dye")
 # Next-event estimation's per-wavelength values: the light's radiance, the phase function, ratio-tracked
 # transmittance and null-event ratio, and the MIS sums.
 LightSample = namedtuple("LightSample", "radiance phase transmittance null_ratio r_l r_u")
 # One majorant DDA per medium (`_tracker_*`): integer and float state per medium.
 Tracker = namedtuple("Tracker", "state_i state_f")
-# The fluorescent branch (`_offer_fluorescence`): the reservoir's total weight, the chosen collision, each
-# camera wavelength's share of its weight, its medium and depth; the radiance collected so far and the
-# factor of each camera wavelength for the sub-path being traced.
-Fluorescent = namedtuple("Fluorescent", "total point share medium radiance scale")
+# The fluorescent branch (`_offer_fluorescence`, `fluorescent_reservoir`): per reservoir (unguided, front,
+# back) its total weight, its collision, each camera wavelength's share of the collision's weight, its
+# medium and vertex depth, and its dye optical depth; the dye optical depth along the current segment; the
+# radiance collected so far and the factor of each camera wavelength for the sub-path being traced.
+Fluorescent = namedtuple("Fluorescent", "total point share medium tau_at tau radiance scale")
 
 
 @jit(inline="always")
@@ -524,7 +531,7 @@ def _new_path(media):
 @jit(inline="always")
 def _new_coefficients(media):
     return Coefficients(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
-                        np.zeros((media, MAX_LAMBDAS)), np.zeros((media, MAX_LAMBDAS)))
+                        np.zeros((media, MAX_LAMBDAS)), np.zeros((media, MAX_LAMBDAS)), np.zeros(1))
 
 
 @jit(inline="always")
@@ -535,7 +542,8 @@ def _new_light_sample():
 
 @jit(inline="always")
 def _new_fluorescent():
-    return Fluorescent(np.zeros(1), np.zeros(3), np.zeros(MAX_LAMBDAS), np.zeros(2, dtype=np.int64),
+    return Fluorescent(np.zeros(RESERVOIRS), np.zeros((RESERVOIRS, 3)), np.zeros((RESERVOIRS, MAX_LAMBDAS)),
+                       np.zeros((RESERVOIRS, 2), dtype=np.int64), np.zeros(RESERVOIRS), np.zeros(1),
                        np.zeros(MAX_LAMBDAS), np.zeros(MAX_LAMBDAS))
 
 
@@ -670,9 +678,12 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, shadow, 
 
 @jit(inline="always")
 def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, vertex, fl):
-    """Offer each medium's fluorescent source at a tentative collision to the reservoir `fl`: its weight
-    Σ_i β_i σ_fl,i / (σ̄ · mean r_u) (the collision estimator of a source, as for thermal emission), kept
-    with probability weight ÷ total weight so far."""
+    """Offer each medium's fluorescent source at a tentative collision to the reservoirs `fl`: its weight
+    Σ_i β_i σ_fl,i / (σ̄ · mean r_u) (the collision estimator of a source, as for thermal emission), times
+    each reservoir's guide at the segment's dye optical depth, kept with probability guided weight ÷ the
+    reservoir's total so far (one uniform for the three). Then the optical depth grows by the collision
+    estimator of the dyes' absorption."""
+    tau = fl.tau[0]
     for m in range(ks.density_scale.shape[0]):
         if ks.fluor_strength[m] <= 0.0:  # no dye: nothing to offer, and the tracking loop stays lean
             continue
@@ -682,12 +693,17 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
         if source <= 0.0:
             continue
         weight = source / (sigma_bar * mean_r_u)
-        fl.total[0] += weight
-        if _next(path.stream) * fl.total[0] < weight:
-            fl.point[0], fl.point[1], fl.point[2] = qx, qy, qz
-            fl.medium[0], fl.medium[1] = m, depth + 1
-            for i in range(n):
-                fl.share[i] = path.beta[i] * vertex.medium_fl[m, i] / source
+        u = _next(path.stream)
+        for k in range(RESERVOIRS):
+            guided = weight if k == 0 else weight * (front_guide(tau) if k == 1 else back_guide(tau))
+            fl.total[k] += guided
+            if u * fl.total[k] < guided:
+                fl.point[k, 0], fl.point[k, 1], fl.point[k, 2] = qx, qy, qz
+                fl.medium[k, 0], fl.medium[k, 1] = m, depth + 1
+                fl.tau_at[k] = tau
+                for i in range(n):
+                    fl.share[k, i] = path.beta[i] * vertex.medium_fl[m, i] / source
+    fl.tau[0] = tau + vertex.dye[0] / sigma_bar
 
 
 @jit(inline="always")
@@ -698,6 +714,7 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, n, path, vertex, tracker, fl
     beta, r_u, r_l = path.beta, path.r_u, path.r_l
     sigma_a, sigma_s = vertex.sigma_a, vertex.sigma_s
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, tracker)
+    fl.tau[0] = 0.0
     t = 0.0
     while True:
         t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t)
@@ -754,18 +771,29 @@ def _escape(ks, dx, dy, dz, scattered, n, path, light):
 
 
 @jit(inline="always")
-def _start_fluorescent_branch(ks, path, fl):
-    """A one-wavelength sub-path at the reservoir's collision: λ_in drawn ∝ the excitation of the medium
-    that fluoresces (binned, then weighted to the interpolated spectrum), fresh weights, and an empty
-    reservoir for its own fluorescent sources."""
-    medium = fl.medium[0]
+def _chosen_source(path, fl):
+    """After a transport: the reservoir whose collision starts the next fluorescent sub-path and that
+    collision's weight w / p (`fluorescent_reservoir.mixture_weight`), or (0, 0.0) when nothing was offered."""
+    if fl.total[0] <= 0.0:
+        return 0, 0.0
+    k = chosen_reservoir(_next(path.stream))
+    return k, mixture_weight(fl.tau_at[k], fl.total[0], fl.total[1], fl.total[2])
+
+
+@jit(inline="always")
+def _start_fluorescent_branch(ks, path, fl, k):
+    """A one-wavelength sub-path at reservoir k's collision: λ_in drawn ∝ the excitation of the medium
+    that fluoresces (binned, then weighted to the interpolated spectrum), fresh weights, and empty
+    reservoirs for its own fluorescent sources."""
+    medium = fl.medium[k, 0]
     path.lams[0] = sample_binned(ks.excitation_cdf[medium], _next(path.stream))
     path.beta[0] = linear_over_binned(ks.excitation[medium], path.lams[0])
     path.r_u[0] = 1.0
     path.r_l[0] = 1.0
     path.radiance[0] = 0.0
     _fill_spectral_cache(ks, path.lams, 1, path.spec)
-    fl.total[0] = 0.0
+    for j in range(RESERVOIRS):
+        fl.total[j] = 0.0
 
 
 @jit(inline="always")
@@ -852,19 +880,23 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, shad
 def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, fl):
     """Transport of one path from a camera ray, then its fluorescent sub-paths: collects its radiance per
     camera wavelength in `path.radiance`."""
-    fl.total[0] = 0.0
+    for j in range(RESERVOIRS):
+        fl.total[j] = 0.0
     _transport(ks, ox, oy, oz, dx, dy, dz, 0, False, n, path, vertex, shadow, light, tracker, fl)
+    k, weight = _chosen_source(path, fl)
     for i in range(n):
         fl.radiance[i] = path.radiance[i]
-        fl.scale[i] = fl.total[0] * fl.share[i]
-    while fl.total[0] > 0.0 and fl.medium[1] <= ks.max_depth:
-        depth = fl.medium[1]
-        _start_fluorescent_branch(ks, path, fl)
-        _transport(ks, fl.point[0], fl.point[1], fl.point[2], 0.0, 0.0, 1.0, depth, True, 1, path, vertex, shadow,
-                   light, tracker, fl)
+        fl.scale[i] = weight * fl.share[k, i]
+    while weight > 0.0 and fl.medium[k, 1] <= ks.max_depth:
+        depth = fl.medium[k, 1]
+        ox, oy, oz = fl.point[k, 0], fl.point[k, 1], fl.point[k, 2]
+        _start_fluorescent_branch(ks, path, fl, k)
+        _transport(ks, ox, oy, oz, 0.0, 0.0, 1.0, depth, True, 1, path, vertex, shadow, light, tracker, fl)
         for i in range(n):
             fl.radiance[i] += fl.scale[i] * path.radiance[0]
-            fl.scale[i] *= fl.total[0]
+        k, weight = _chosen_source(path, fl)
+        for i in range(n):
+            fl.scale[i] *= weight
     for i in range(n):
         path.radiance[i] = fl.radiance[i]
 

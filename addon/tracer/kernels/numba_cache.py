@@ -27,8 +27,8 @@ APP = "spectral_volume"
 CACHE_DIR_VARIABLE = "SPECTRAL_VOLUME_CACHE_DIR"
 TRACER = Path(__file__).resolve().parent.parent
 PACKAGE = __name__.rpartition(".kernels.")[0]  # "addon.tracer" or "bl_ext.<repo>.spectral_volume.addon.tracer"
-KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.py", "phase.py", "binned.py",
-                  "planck.py", "shared_math.py", "wavelengths.py")
+KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.py", "kernels/fluorescent_reservoir.py",
+                  "phase.py", "binned.py", "planck.py", "shared_math.py", "wavelengths.py")
 COMPILE_SECONDS_FILE = "compile-seconds.txt"
 DEFAULT_COMPILE_SECONDS = 110.0  # until measured here: a cold compile took 106 s on an idle 2-core VM (bench/README.md)
 NOTICE_AFTER_SECONDS = 1.0  # loading a cached kernel takes less; compiling it takes minutes

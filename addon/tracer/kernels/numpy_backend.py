@@ -23,6 +23,7 @@ from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
 from ..planck import planck_radiance
 from ..wavelengths import GRID, LAMBDA_MIN
+from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .layout import (
     CAMERA_PERSPECTIVE as PERSPECTIVE,
     LIGHT_ENVIRONMENT as ENVIRONMENT,
@@ -191,12 +192,13 @@ def _coefficients(ks, points, lams):
     media = ks.density_scale.shape[0]
     out = _Batch(sigma_a=np.zeros((count, n)), sigma_s=np.zeros((count, n)),
                  emission=np.zeros((count, n)), medium_s=np.zeros((count, media, n)),
-                 medium_fl=np.zeros((count, media, n)))
+                 medium_fl=np.zeros((count, media, n)), dye=np.zeros(count))
     for m in range(media):
         rho = _density(ks, m, points) * ks.density_scale[m]
         rows = np.flatnonzero(rho > 0.0)
         if rows.size == 0:
             continue
+        out.dye[rows] += rho[rows] * ks.excitation_mean[m]
         lam, r = lams[rows], rho[rows, None]
         at = _at(lam)
         sigma_t = r * _table(ks.extinction[m], at)
@@ -497,9 +499,12 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
 
 def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
     """Offer each medium's fluorescent source at the tentative collisions of paths `rows` to their
-    reservoirs `fl` (indexed by path id), as the Numba kernel's `_offer_fluorescence`."""
+    reservoirs `fl` (indexed by path id; `fluorescent_reservoir`), as the Numba kernel's
+    `_offer_fluorescence`; then the dye optical depth of each path's segment grows."""
     ids = paths.id[rows]
     beta = paths.beta[rows]
+    tau = fl.tau[ids]
+    guides = (np.ones(rows.size), front_guide(tau), back_guide(tau))
     for m in range(ks.density_scale.shape[0]):
         if ks.fluor_strength[m] <= 0.0:  # no dye: nothing to offer
             continue
@@ -510,12 +515,17 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
         if not offering.size:
             continue
         weight = source[offering] / (sigma_bar[offering] * mean_r_u[offering])
-        fl.total[ids[offering]] += weight
-        kept = offering[_draw(paths, rows[offering]) * fl.total[ids[offering]] < weight]
-        fl.point[ids[kept]] = points[kept]
-        fl.medium[ids[kept]] = m
-        fl.depth[ids[kept]] = paths.depth[rows[kept]] + 1
-        fl.share[ids[kept], :beta.shape[1]] = beta[kept] * c.medium_fl[kept, m] / source[kept, None]
+        u = _draw(paths, rows[offering])
+        for k in range(RESERVOIRS):
+            guided = weight if k == 0 else weight * guides[k][offering]
+            fl.total[ids[offering], k] += guided
+            kept = offering[u * fl.total[ids[offering], k] < guided]
+            fl.point[ids[kept], k] = points[kept]
+            fl.medium[ids[kept], k] = m
+            fl.depth[ids[kept], k] = paths.depth[rows[kept]] + 1
+            fl.tau_at[ids[kept], k] = tau[kept]
+            fl.share[ids[kept], k, :beta.shape[1]] = beta[kept] * c.medium_fl[kept, m] / source[kept, None]
+    fl.tau[ids] = tau + c.dye / sigma_bar
 
 
 def _free_flight(ks, paths, radiance, fl):
@@ -558,6 +568,7 @@ def _free_flight(ks, paths, radiance, fl):
         vertex.q[keep], vertex.medium_s[keep] = points[scattered], c.medium_s[scattered]
         return stop
 
+    fl.tau[paths.id] = 0.0
     _track(ks, paths, np.arange(count), paths.o, paths.d, INF, collide)
     return vertex
 
@@ -687,20 +698,34 @@ def _bounce(ks, paths, radiance, fl):
     return _scatter(ks, paths, vertex, np.zeros(len(paths), dtype=bool), radiance)
 
 
-def _fluorescent_paths(ks, stream, ids, fl):
-    """One-wavelength sub-paths from the reservoirs' collisions of paths `ids` (as the Numba kernel's
-    `_start_fluorescent_branch`): λ_in drawn ∝ the excitation of the medium that fluoresces, fresh
-    weights, empty reservoirs; each emits isotropically (`_scatter`)."""
+def _choose_sources(stream, fl, ids, reservoir, weight):
+    """After a round of transport of paths `ids`: the reservoir whose collision starts each one's next
+    fluorescent sub-path (into `reservoir`) and that collision's weight w / p (into `weight`; 0 where
+    nothing was offered), as the Numba kernel's `_chosen_source`."""
+    weight[ids] = 0.0
+    offered = ids[fl.total[ids, 0] > 0.0]
+    if offered.size:
+        chosen = chosen_reservoir(_draw(_Batch(id=offered, stream=stream)))
+        reservoir[offered] = chosen
+        totals = fl.total[offered]
+        weight[offered] = mixture_weight(fl.tau_at[offered, chosen], totals[:, 0], totals[:, 1], totals[:, 2])
+
+
+def _fluorescent_paths(ks, stream, ids, reservoir, fl):
+    """One-wavelength sub-paths from the chosen reservoirs' collisions of paths `ids` (as the Numba
+    kernel's `_start_fluorescent_branch`): λ_in drawn ∝ the excitation of the medium that fluoresces,
+    fresh weights, empty reservoirs; each emits isotropically (`_scatter`)."""
     count = ids.size
+    chosen = reservoir[ids]
     paths = _Batch(id=ids, stream=stream, lams=np.zeros((count, 1)), beta=np.ones((count, 1)),
-                   r_u=np.ones((count, 1)), r_l=np.ones((count, 1)), o=fl.point[ids],
-                   d=np.tile([0.0, 0.0, 1.0], (count, 1)), depth=fl.depth[ids].copy(),
+                   r_u=np.ones((count, 1)), r_l=np.ones((count, 1)), o=fl.point[ids, chosen],
+                   d=np.tile([0.0, 0.0, 1.0], (count, 1)), depth=fl.depth[ids, chosen],
                    scattered=np.ones(count, dtype=bool))
     u = _draw(paths)
     for m in range(ks.density_scale.shape[0]):
-        chosen = fl.medium[ids] == m
-        paths.lams[chosen, 0] = sample_binned(ks.excitation_cdf[m], u[chosen])
-        paths.beta[chosen, 0] = linear_over_binned(ks.excitation[m], paths.lams[chosen, 0])
+        dyed = fl.medium[ids, chosen] == m
+        paths.lams[dyed, 0] = sample_binned(ks.excitation_cdf[m], u[dyed])
+        paths.beta[dyed, 0] = linear_over_binned(ks.excitation[m], paths.lams[dyed, 0])
     fl.total[ids] = 0.0
     return paths
 
@@ -711,23 +736,29 @@ def _trace(ks, px, py, pixel_keys, samples):
     paths, lam_cam, pdf_cam = _camera_paths(ks, px, py, pixel_keys, samples)
     count, n = lam_cam.shape
     stream = paths.stream
-    fl = _Batch(total=np.zeros(count), point=np.zeros((count, 3)), share=np.zeros((count, n)),
-                medium=np.zeros(count, dtype=np.int64), depth=np.zeros(count, dtype=np.int64))
+    fl = _Batch(total=np.zeros((count, RESERVOIRS)), point=np.zeros((count, RESERVOIRS, 3)),
+                share=np.zeros((count, RESERVOIRS, n)), medium=np.zeros((count, RESERVOIRS), dtype=np.int64),
+                depth=np.zeros((count, RESERVOIRS), dtype=np.int64), tau_at=np.zeros((count, RESERVOIRS)),
+                tau=np.zeros(count))
     radiance = np.zeros((count, n))
     while len(paths):
         paths = _bounce(ks, paths, radiance, fl)
-    scale = fl.total[:, None] * fl.share
-    ids = np.flatnonzero((fl.total > 0.0) & (fl.depth <= ks.max_depth))
+    everyone = np.arange(count)
+    reservoir, weight = np.zeros(count, dtype=np.int64), np.zeros(count)
+    _choose_sources(stream, fl, everyone, reservoir, weight)
+    scale = weight[:, None] * fl.share[everyone, reservoir]
+    ids = np.flatnonzero((weight > 0.0) & (fl.depth[everyone, reservoir] <= ks.max_depth))
     while ids.size:
-        paths = _fluorescent_paths(ks, stream, ids, fl)
+        paths = _fluorescent_paths(ks, stream, ids, reservoir, fl)
         emitted = np.zeros((count, 1))
         paths = _scatter(ks, paths, _Batch(medium_s=np.zeros((ids.size, ks.density_scale.shape[0], 1))),
                          np.ones(ids.size, dtype=bool), emitted)
         while len(paths):
             paths = _bounce(ks, paths, emitted, fl)
         radiance[ids] += scale[ids] * emitted[ids]
-        scale[ids] *= fl.total[ids, None]
-        ids = ids[(fl.total[ids] > 0.0) & (fl.depth[ids] <= ks.max_depth)]
+        _choose_sources(stream, fl, ids, reservoir, weight)
+        scale[ids] *= weight[ids, None]
+        ids = ids[(weight[ids] > 0.0) & (fl.depth[ids, reservoir[ids]] <= ks.max_depth)]
     xyz = np.zeros((samples.shape[0], 3))
     for i in range(n):
         counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
