@@ -7,11 +7,12 @@ Blender scene exports to the same tracer scene that `scenes` builds in code. Wri
 - `rayleigh.blend`: scenes "Report" (grey air, anisotropy rising with λ) and "True Rayleigh"
   (extinction ∝ λ⁻⁴, Rayleigh phase), sharing the ground;
 - `fluorescent_frog.blend`: a fluorescent frog on a white pad under a 275–450 nm lamp;
+- `highlighter_ink.blend`: two glasses of highlighter ink (optically thick, and diluted 50×) under that lamp;
 - `metamerism.blend`: the light switch: scenes "Simple D65", "Simple D65 lower half" (the report's
   cubes), "Designed D65", "Designed A" (a pair designed with colour-science), each a cube pair
   collection with a light collection and World;
 - `fire.blend`: fire and smoke domains reading one fluid cache (never simulated);
-- `volumes/`: the VDB files they read (`//volumes/...`): the air and ground, the frog, the fire's
+- `volumes/`: the VDB files they read (`//volumes/...`): the air and ground, the frog, the inks, the fire's
   cache `fire_cache/data/fluid_data_0001.vdb`.
 Rebuilding writes the same content in different bytes (Blender and OpenVDB stamp their files), so
 tests/demos/test_blends.py compares the exported scenes, not the files.
@@ -51,6 +52,7 @@ DEMO_SCENES = {
     "rayleigh_report": DemoScene("rayleigh.blend", "Report", 48, -1.0),
     "rayleigh_true": DemoScene("rayleigh.blend", "True Rayleigh", 48, 2.0),
     "fluorescent_frog": DemoScene("fluorescent_frog.blend", "Frog", 32),
+    "highlighter_ink": DemoScene("highlighter_ink.blend", "Ink", 32),
     "fire": DemoScene("fire.blend", "Fire", 48),
     "metamers_simple_d65": DemoScene("metamerism.blend", "Simple D65", 24, 0.5),
     "metamers_simple_lower_half": DemoScene("metamerism.blend", "Simple D65 lower half", 24, 0.5),
@@ -102,17 +104,25 @@ def build_rayleigh(out: Path) -> list:
     return built
 
 
-def build_frog(out: Path) -> list:
-    frog = scenes.fluorescent_frog(WIDTH, HEIGHT, 1)
-    scene = _scene("fluorescent_frog")
+def _under_uv_lamp(out: Path, demo: str, tracer, vdb: str) -> list:
+    """A demo scene lit like the frog (the UV lamp and its fill), its media read from `volumes/<vdb>`."""
+    scene = _scene(demo)
     collection = scene.collection
-    parts.add_camera(scene, frog.camera)
-    lamp, fill = frog.lights
+    parts.add_camera(scene, tracer.camera)
+    lamp, fill = tracer.lights
     uv = lambda settings: demo_parts.set_flat(settings, scenes.UV_WINDOW)
     parts.add_sun(collection, lamp, uv)
     scene.world = parts.new_world("UV fill", fill, uv)
-    _volumes(collection, frog.media, _vdb(out, "frog.vdb", {m.name: m.density for m in frog.media}))
+    _volumes(collection, tracer.media, _vdb(out, vdb, {m.name: m.density for m in tracer.media}))
     return [scene]
+
+
+def build_frog(out: Path) -> list:
+    return _under_uv_lamp(out, "fluorescent_frog", scenes.fluorescent_frog(WIDTH, HEIGHT, 1), "frog.vdb")
+
+
+def build_highlighter_ink(out: Path) -> list:
+    return _under_uv_lamp(out, "highlighter_ink", scenes.highlighter_ink(WIDTH, HEIGHT, 1), "ink.vdb")
 
 
 LIGHT_PRESETS = {"D65": ("D65", None), "D65 lower half": ("D65", scenes.LOWER_HALF), "A": ("A", None)}
@@ -203,7 +213,7 @@ def write_blend(path: Path, build) -> None:
         addon.unregister()
 
 
-BUILDERS = {"rayleigh": build_rayleigh, "fluorescent_frog": build_frog,
+BUILDERS = {"rayleigh": build_rayleigh, "fluorescent_frog": build_frog, "highlighter_ink": build_highlighter_ink,
             "metamerism": lambda _out: build_metamerism(designed_pair()), "fire": build_fire}
 
 

@@ -215,6 +215,19 @@ def frog(scene, xyz: np.ndarray) -> dict:
             "lamp": describe(light_xyz(sun(scene)), white)}
 
 
+INK_COLUMN = 0.2  # a pixel shows a glass if its ray crosses at least this much of its ink (units)
+
+
+def ink(scene, xyz: np.ndarray) -> dict:
+    """Colour of the dense ink, of the diluted ink, of the pad and of the lamp, against the D65 white."""
+    white = np.array(colorimetry.colour_science().xy_to_XYZ(D65_WHITE_XY))
+    glasses = {name: column_density(scene.camera, medium(scene, name).density) >= INK_COLUMN
+               for name in ("ink", "diluted ink")}
+    on_pad = (column_density(scene.camera, medium(scene, "pad").density) >= 0.02) & ~glasses["ink"] & ~glasses["diluted ink"]
+    return {**{name: describe(region_xyz(xyz, mask), white) for name, mask in glasses.items()},
+            "pad": describe(region_xyz(xyz, on_pad), white), "lamp": describe(light_xyz(sun(scene)), white)}
+
+
 def absorbed_power(medium, light: Light, supersample: int = 4) -> float:
     """Power (W, per unit² of the scene's length) that the fluorophore absorbs from a sun shining
     straight down (+z): ∫ E(λ) ∫∫ (1 − exp(−τ(x, y, λ))) dx dy dλ, with τ the fluorophore's optical

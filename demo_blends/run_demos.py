@@ -55,15 +55,26 @@ def _sky_lines(f: dict) -> list[str]:
         metrics.format_colour(name, f[name]) for name in ("sky away", "around sun", "sun disc", "light")]
 
 
+def _energy_lines(f: dict) -> list[str]:
+    if "energy" not in f:
+        return []
+    e = f["energy"]
+    return [f"energy: emitted {e['emitted_W']:.4g} W / absorbed UV {e['absorbed_W']:.4g} W = "
+            f"{e['ratio']:.3f} (quantum yield {e['quantum_yield']:.3g}); views' intensities "
+            f"{e['intensity_min']:.2f}–{e['intensity_max']:.2f} × their mean"]
+
+
 def _frog_lines(f: dict) -> list[str]:
     lines = [f"frog {_nm(f['frog']['dominant_nm'])} under a {_nm(f['lamp']['dominant_nm'])} lamp"]
-    lines += [metrics.format_colour(name, f[name]) for name in ("frog", "pad", "lamp")]
+    return lines + [metrics.format_colour(name, f[name]) for name in ("frog", "pad", "lamp")] + _energy_lines(f)
+
+
+def _ink_lines(f: dict) -> list[str]:
+    caption = f"ink {_nm(f['ink']['dominant_nm'])}"
     if "energy" in f:
-        e = f["energy"]
-        lines.append(f"energy: emitted {e['emitted_W']:.4g} W / absorbed UV {e['absorbed_W']:.4g} W = "
-                     f"{e['ratio']:.3f} (quantum yield {e['quantum_yield']}); views' intensities "
-                     f"{e['intensity_min']:.2f}–{e['intensity_max']:.2f} × their mean")
-    return lines
+        caption += f", emitted/absorbed {f['energy']['ratio']:.3f} (QY {f['energy']['quantum_yield']:.3g})"
+    names = ("ink", "diluted ink", "pad", "lamp")
+    return [caption] + [metrics.format_colour(name, f[name]) for name in names] + _energy_lines(f)
 
 
 def _cube_lines(f: dict) -> list[str]:
@@ -87,6 +98,7 @@ DEMOS = [
     Demo("rayleigh_report", "Rayleigh, the report's setup", metrics.rayleigh, _sky_lines),
     Demo("rayleigh_true", "Rayleigh: 1/lambda^4, Rayleigh phase", metrics.rayleigh, _sky_lines),
     Demo("fluorescent_frog", "Fluorescent frog, 275-450 nm lamp", metrics.frog, _frog_lines),
+    Demo("highlighter_ink", "Highlighter ink, dense and diluted 50x", metrics.ink, _ink_lines),
     Demo("fire", "Fire: blackbody 1000-2000 K", metrics.fire, _fire_lines),
     Demo("metamers_simple_d65", "Report's cubes under D65", _cubes, _cube_lines),
     Demo("metamers_simple_lower_half", "Report's cubes, D65 below 570 nm", _cubes, _cube_lines),
@@ -109,16 +121,21 @@ class Result:
     figures: dict = field(default_factory=dict)
 
 
-def frog_energy(body, size: int, spp: int, views: int) -> dict:
-    """The frog's emitted power (from renders of `body`, the exported frog medium, over the sphere)
-    against the UV power it absorbs (from its grid and the lamp, `metrics.absorbed_power`)."""
-    rendered = [(view, render(view).film.xyz) for view in scenes.frog_energy_views(size, spp, views, body)]
+def fluorescence_energy(body, box, size: int, spp: int, views: int) -> dict:
+    """A fluorescent body's emitted power (from renders of `body`, an exported medium inside `box`, over
+    the sphere) against the UV power it absorbs (from its grid and the lamp, `metrics.absorbed_power`)."""
+    rendered = [(view, render(view).film.xyz) for view in scenes.energy_views(body, box, size, spp, views)]
     emitted, intensities = metrics.emitted_power(rendered, body.fluorescence.emission)
-    absorbed = metrics.absorbed_power(body, scenes.FROG_ENERGY_LAMP)
+    absorbed = metrics.absorbed_power(body, scenes.ENERGY_LAMP)
     return {"emitted_W": emitted, "absorbed_W": absorbed, "ratio": emitted / absorbed,
             "quantum_yield": body.fluorescence.quantum_yield, "views": views,
             "intensity_min": float(intensities.min() / intensities.mean()),
             "intensity_max": float(intensities.max() / intensities.mean())}
+
+
+# The fluorescent body whose energy balance each fluorescent demo proves: demo → (medium, its box).
+ENERGY_BODIES = {"fluorescent_frog": ("frog", scenes.FROG_BOX),
+                 "highlighter_ink": ("ink", scenes.ink_box(scenes.INK_CENTRES[0]))}
 
 
 @contextmanager
@@ -164,9 +181,10 @@ def run(out: Path, scale: float = 1.0, quality: float = 1.0, only=None, denoise:
             result = render_demo(demo, blends, scale, quality)
             figures_start = time.perf_counter()
             result.figures = demo.figures(result.scene, result.xyz)
-            if demo.name == "fluorescent_frog":
-                result.figures["energy"] = frog_energy(metrics.medium(result.scene, "frog"), 24,
-                                                       max(2, round(64 * quality)), 16)
+            if demo.name in ENERGY_BODIES:
+                body, box = ENERGY_BODIES[demo.name]
+                result.figures["energy"] = fluorescence_energy(metrics.medium(result.scene, body), box, 24,
+                                                               max(2, round(64 * quality)), 16)
             figures_seconds = time.perf_counter() - figures_start
             film_rgb = colorimetry.xyz_to_rgb(result.xyz)
             image_io.write_exr(out / f"{demo.name}.exr", result.xyz, film_rgb, result.variance)

@@ -279,15 +279,14 @@ def fibonacci_directions(count: int) -> np.ndarray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
 
 
-FROG_ENERGY_LAMP = sun(UV_LAMP, 0.05, elevation=90.0, name="UV lamp overhead")  # no angle: never seen
+ENERGY_LAMP = sun(UV_LAMP, 0.05, elevation=90.0, name="UV lamp overhead")  # no angle: never seen
 
 
-def frog_energy_views(size: int, spp: int, views: int = 16, body: Medium | None = None) -> list[Scene]:
-    """The frog's body (`body`, default `frog_medium()`) alone under a lamp straight above it, seen by
-    orthographic cameras from `views` directions over the whole sphere, each framing all of it: what
-    `metrics.emitted_power` integrates into the power the frog sends out."""
-    body = frog_medium() if body is None else body
-    lo, hi = np.array(FROG_BOX[0]), np.array(FROG_BOX[1])
+def energy_views(body: Medium, box, size: int, spp: int, views: int = 16) -> list[Scene]:
+    """A fluorescent body (inside `box`) alone under a lamp straight above it, seen by orthographic
+    cameras from `views` directions over the whole sphere, each framing all of it: what
+    `metrics.emitted_power` integrates into the power the body sends out."""
+    lo, hi = np.array(box[0]), np.array(box[1])
     centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
     cameras = []
     for view in fibonacci_directions(views):
@@ -295,7 +294,49 @@ def frog_energy_views(size: int, spp: int, views: int = 16, body: Medium | None 
         to_world = look_at(centre + 3.0 * radius * view, centre, up)
         cameras.append(Camera(to_world=to_world, width=size, height=size, kind="orthographic",
                               ortho_scale=2.0 * radius))
-    return [scene(cam, (body,), (FROG_ENERGY_LAMP,), spp) for cam in cameras]
+    return [scene(cam, (body,), (ENERGY_LAMP,), spp) for cam in cameras]
+
+
+# ----------------------------------------------------------------------------- dense fluorescence: highlighter ink
+
+# A pyranine-like highlighter dye: absorbs violet (405 nm; nothing above 460 nm, so it never absorbs
+# its own light), emits green around 515 nm with quantum yield 0.9.
+INK_EXCITATION = spectra.Spectrum(spectra.gaussian(405.0, 20.0).values * (1.0 - smooth_step(460.0, 15.0)))
+INK_EMISSION = spectra.gaussian(515.0, 22.0)
+INK_QUANTUM_YIELD = 0.9
+INK_RADIUS, INK_HEIGHT = 0.3, 0.8
+# The ink's optical depth at the excitation peak across the glass is 2 × 0.3 × 120 = 72 (σ_fl·d about 60 at
+# the emission peak): all of the lamp's violet is absorbed in a skin at the lit side. Diluted 50×, 1.4.
+INK_DENSITY = 120.0
+INK_DILUTION = 50.0
+INK_CENTRES = ((-0.4, 0.0), (0.4, 0.0))  # (x, y) of the ink glass and of the diluted one
+
+
+def ink_box(centre) -> tuple:
+    x, y = centre
+    margin = INK_RADIUS + 0.02
+    return (x - margin, y - margin, 0.0), (x + margin, y + margin, INK_HEIGHT + 0.02)
+
+
+def ink_medium(name: str, centre, density: float, cells=(32, 32, 42)) -> Medium:
+    """A glass-shaped cylinder of highlighter ink standing on z = 0: a fluorophore and nothing else."""
+    x0, y0 = centre
+    cylinder = lambda x, y, z: np.maximum(np.hypot(x - x0, y - y0) - INK_RADIUS,
+                                          np.abs(z - INK_HEIGHT / 2) - INK_HEIGHT / 2)
+    grid = sampled_grid(solid(cylinder, edge=0.02), cells, *ink_box(centre))
+    fluorescence = Fluorescence(excitation=INK_EXCITATION, emission=INK_EMISSION, quantum_yield=INK_QUANTUM_YIELD)
+    return medium(name, grid, density, extinction=0.0, albedo=0.0, fluorescence=fluorescence)
+
+
+def highlighter_ink(width: int, height: int, spp: int) -> Scene:
+    """Two glasses of highlighter ink under the frog's lamp: the dense one glows only in a thin skin
+    facing the lamp, the one diluted 50× glows through its whole volume."""
+    lamp = sun(UV_LAMP, 0.05, elevation=45.0, azimuth=-30.0, name="UV lamp")
+    fill = Light(kind="environment", spectrum=UV_LAMP, strength=0.001, name="UV fill")
+    cam = camera((-0.9, 2.6, 1.3), (0.0, 0.0, 0.36), width, height, 40.0)
+    media = (ink_medium("ink", INK_CENTRES[0], INK_DENSITY),
+             ink_medium("diluted ink", INK_CENTRES[1], INK_DENSITY / INK_DILUTION), lily_pad())
+    return scene(cam, media, (lamp, fill), spp)
 
 
 # ----------------------------------------------------------------------------- metamerism: two cubes

@@ -21,6 +21,7 @@ REFERENCES = {
     "rayleigh_report": scenes.rayleigh_report,
     "rayleigh_true": scenes.rayleigh_true,
     "fluorescent_frog": scenes.fluorescent_frog,
+    "highlighter_ink": scenes.highlighter_ink,
     "fire": scenes.fire,
     "metamers_simple_d65": scenes.metamerism_simple("D65"),
     "metamers_simple_lower_half": scenes.metamerism_simple("D65 lower half"),
