@@ -225,7 +225,7 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
     dye[0] = 0.0
     for m in range(ks.density_scale.shape[0]):
         rho = _density(ks, m, px, py, pz) * ks.density_scale[m]
-        if rho > 0.0:
+        if rho > 0.0 and ks.fluor_strength[m] > 0.0:
             dye[0] += rho * ks.excitation_mean[m]
         temperature = _temperature(ks, m, px, py, pz) if ks.temperature_offset[m] >= 0 and rho > 0 else 0.0
         for i in range(n):
@@ -703,7 +703,8 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
                 fl.tau_at[k] = tau
                 for i in range(n):
                     fl.share[k, i] = path.beta[i] * vertex.medium_fl[m, i] / source
-    fl.tau[0] = tau + vertex.dye[0] / sigma_bar
+    if vertex.dye[0] > 0.0:
+        fl.tau[0] = tau + vertex.dye[0] / sigma_bar
 
 
 @jit(inline="always")
@@ -878,25 +879,27 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, shad
 
 @jit(inline="always")
 def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, fl):
-    """Transport of one path from a camera ray, then its fluorescent sub-paths: collects its radiance per
-    camera wavelength in `path.radiance`."""
+    """Transport of one path from a camera ray, then of its fluorescent sub-paths one after another, all
+    through the one `_transport` below (inlined once, not once per kind of path): collects the path's
+    radiance per camera wavelength in `path.radiance`."""
     for j in range(RESERVOIRS):
         fl.total[j] = 0.0
-    _transport(ks, ox, oy, oz, dx, dy, dz, 0, False, n, path, vertex, shadow, light, tracker, fl)
-    k, weight = _chosen_source(path, fl)
-    for i in range(n):
-        fl.radiance[i] = path.radiance[i]
-        fl.scale[i] = weight * fl.share[k, i]
-    while weight > 0.0 and fl.medium[k, 1] <= ks.max_depth:
-        depth = fl.medium[k, 1]
-        ox, oy, oz = fl.point[k, 0], fl.point[k, 1], fl.point[k, 2]
-        _start_fluorescent_branch(ks, path, fl, k)
-        _transport(ks, ox, oy, oz, 0.0, 0.0, 1.0, depth, True, 1, path, vertex, shadow, light, tracker, fl)
-        for i in range(n):
-            fl.radiance[i] += fl.scale[i] * path.radiance[0]
+    depth, emitted, count = 0, False, n
+    while True:
+        _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, count, path, vertex, shadow, light, tracker, fl)
         k, weight = _chosen_source(path, fl)
         for i in range(n):
-            fl.scale[i] *= weight
+            if emitted:  # a sub-path: its radiance at λ_in, then the weight of the next one
+                fl.radiance[i] += fl.scale[i] * path.radiance[0]
+                fl.scale[i] *= weight
+            else:  # the camera path
+                fl.radiance[i] = path.radiance[i]
+                fl.scale[i] = weight * fl.share[k, i]
+        if weight <= 0.0 or fl.medium[k, 1] > ks.max_depth:
+            break
+        depth, emitted, count = fl.medium[k, 1], True, 1
+        ox, oy, oz, dx, dy, dz = fl.point[k, 0], fl.point[k, 1], fl.point[k, 2], 0.0, 0.0, 1.0
+        _start_fluorescent_branch(ks, path, fl, k)
     for i in range(n):
         path.radiance[i] = fl.radiance[i]
 

@@ -198,7 +198,8 @@ def _coefficients(ks, points, lams):
         rows = np.flatnonzero(rho > 0.0)
         if rows.size == 0:
             continue
-        out.dye[rows] += rho[rows] * ks.excitation_mean[m]
+        if ks.fluor_strength[m] > 0.0:
+            out.dye[rows] += rho[rows] * ks.excitation_mean[m]
         lam, r = lams[rows], rho[rows, None]
         at = _at(lam)
         sigma_t = r * _table(ks.extinction[m], at)
