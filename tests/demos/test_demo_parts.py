@@ -46,7 +46,7 @@ def test_absorbed_power_of_an_opaque_box_is_its_shadow_times_the_irradiance():
                                        quantum_yield=1.0)
     box = medium(box_grid(cells=(8, 8, 8), size=(1.0, 2.0, 1.0)), scale=500.0, extinction=0.0,
                  fluorescence=fluorescence)
-    lamp = scenes.FROG_ENERGY_LAMP
+    lamp = scenes.ENERGY_LAMP
     irradiance = metrics.light_xyz(lamp)  # checks the units path too: Y of the irradiance is the strength
     assert np.isclose(irradiance[1], lamp.strength)
     total = (lamp.spectrum.values * strength_scale(lamp)).sum()
