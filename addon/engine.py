@@ -19,8 +19,6 @@ dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes,
 viewport's Material Preview uses EEVEE.
 """
 
-import time
-
 import bpy
 
 from . import dispatch, render_export
@@ -29,7 +27,7 @@ from .pixels import blender_rows, with_alpha
 from .props.render import ENGINE_ID
 from .tracer.errors import SpectralError
 from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
-from .tracer.progress import TimeLeft
+from .tracer.progress import Throttle, TimeLeft
 
 # The Render Result is rewritten at most every RESULT_SECONDS, and less often when writing it costs more
 # than 1/RESULT_COST_RATIO of the time between writes (a 1920×1080 film takes a while to convert).
@@ -65,20 +63,16 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
         result = self.begin_result(0, 0, camera.width, camera.height)
         spp = export.scene.settings.spp
         time_left = TimeLeft()
-        written_at, write_seconds = time.perf_counter(), 0.0
+        throttle = Throttle(RESULT_SECONDS, RESULT_COST_RATIO)
 
         def progress(film, fraction):
-            nonlocal written_at, write_seconds
             self.update_progress(fraction)
             left = time_left(fraction)
             self._show_stats(f"{int(fraction * spp)}/{spp} samples"
                              + ("" if left is None else f" | about {left:.0f} s left"))
-            now = time.perf_counter()
-            due = now - written_at >= max(RESULT_SECONDS, RESULT_COST_RATIO * write_seconds)
-            if due and not self.test_break():  # after Esc, stop at once: the full result is written below
-                self._write(result, film, preview=True)
-                written_at = time.perf_counter()
-                write_seconds = written_at - now
+            if throttle.due() and not self.test_break():  # after Esc, stop at once: the full result is written below
+                with throttle.timed():
+                    self._write(result, film, preview=True)
 
         try:
             rendered = dispatch.run(export.scene, depsgraph.scene.original.spectral.scheduler_address,
