@@ -13,10 +13,11 @@ render's own depsgraph never writes them back to the original data), and the ins
 Geometry Nodes volumes (Mesh to Volume, Volume Cube, ...) and instanced collections, each at its
 instance matrix. Nothing is written to disk here and the Blender data is not changed.
 
-The add-on exports render depsgraphs (F12, and `addon.render_export` for everything else); scripts may pass
-a viewport one. Setting an add-on property does not tag its data block for re-evaluation, so a viewport
-depsgraph may hold stale copies of the materials, lights, worlds and scene: those are
-tagged and re-evaluated first. A render's depsgraph is built fresh and needs none of this. Objects are not
+The add-on exports render depsgraphs (F12, and `addon.render_export` for everything else) and the
+Rendered viewport's own (see `export_scene`); scripts may pass a viewport one. Setting an add-on property
+does not always tag its data block for re-evaluation (the World's and the scene's settings), so a viewport
+depsgraph may hold stale copies of the materials, lights, worlds and scene: those are tagged and
+re-evaluated first. A render's depsgraph is built fresh and needs none of this. Objects are not
 tagged (that would re-run their modifiers and simulations): their settings, the density grid's name and the
 voxel size, are read from the original objects.
 """
@@ -26,7 +27,7 @@ from dataclasses import dataclass, field
 import bpy
 
 from ..tracer.errors import SpectralError
-from ..tracer.scene import RenderSettings, Scene
+from ..tracer.scene import Camera, RenderSettings, Scene
 from .camera import export_camera
 from .fluids import fluid_domain, fluid_grids
 from .lights import export_light, export_world
@@ -92,12 +93,20 @@ def _synchronise(depsgraph) -> None:
     depsgraph.update()
 
 
-def export_scene(depsgraph) -> Export:
-    """Export the depsgraph's scene at its current frame. Raises SpectralError on bad input."""
-    _synchronise(depsgraph)
+def export_scene(depsgraph, view: Camera | None = None) -> Export:
+    """Export the depsgraph's scene at its current frame. Raises SpectralError on bad input.
+
+    `view` is the Rendered viewport's camera, rendered instead of the scene camera. The viewport exports
+    while Blender evaluates its depsgraph (`view_update`), when the depsgraph must not be updated: nothing
+    is tagged, and the World and render settings are read from the original scene (their evaluated copies
+    do not follow add-on property edits; those of materials and lights do, and a viewport's depsgraph
+    writes animated values back to the originals)."""
+    if view is None:
+        _synchronise(depsgraph)
     scene = depsgraph.scene_eval
+    settings_scene = scene if view is None else depsgraph.scene.original
     warnings = unsupported_settings(scene)
-    camera = export_camera(scene, scene.camera.evaluated_get(depsgraph) if scene.camera else None)
+    camera = view or export_camera(scene, scene.camera.evaluated_get(depsgraph) if scene.camera else None)
     media, lights = [], []
     volume_owners = {instance.object.original for instance in depsgraph.object_instances
                      if instance.is_instance and instance.object.type == "VOLUME"}
@@ -113,11 +122,11 @@ def export_scene(depsgraph) -> Export:
             medium = _medium(instance, depsgraph, volume_owners)
             if medium is not None:
                 media.append(medium)
-    world = export_world(scene.world)
+    world = export_world(settings_scene.world)
     if world is not None:
         lights.append(world)
     if not lights and not any(medium.emission is not None for medium in media):
         raise SpectralError("the scene has no lights: add a sun, point or spot light, or turn on the "
                             "Spectral World in the World properties")
-    return Export(Scene(camera=camera, media=tuple(media), lights=tuple(lights), settings=render_settings(scene)),
-                  warnings)
+    settings = render_settings(settings_scene)
+    return Export(Scene(camera=camera, media=tuple(media), lights=tuple(lights), settings=settings), warnings)
