@@ -61,12 +61,14 @@ def unsupported_settings(scene) -> list[str]:
     return warnings
 
 
-def _medium(instance, depsgraph, volume_owners):
-    """The medium of one depsgraph instance, or None when it is not a volume."""
+def _medium(instance, depsgraph, volume_owners, originals: bool):
+    """The medium of one depsgraph instance, or None when it is not a volume. With `originals`, its
+    material's settings are read from the original material (see `export_scene`)."""
     obj, matrix = instance.object, instance.matrix_world
     metres_per_unit = depsgraph.scene_eval.unit_settings.scale_length
     if obj.type == "VOLUME" or (obj.type == "MESH" and fluid_domain(obj) is not None):
         material = require_material(obj, depsgraph)
+        material = material.original if originals else material
         names = [obj.original.spectral.density_grid]
         if material.spectral.use_blackbody:
             names.append(material.spectral.temperature_grid)
@@ -77,6 +79,7 @@ def _medium(instance, depsgraph, volume_owners):
         material = spectral_material(obj, depsgraph)
         if material is None or (obj.original in volume_owners and not obj.data.polygons):
             return None  # Geometry Nodes turned the mesh into a volume: only that volume renders
+        material = material.original if originals else material
         return export_medium(obj.name, material, voxelise(obj, obj.original.spectral.voxel_size, matrix), None,
                              metres_per_unit)
     return None
@@ -98,13 +101,14 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
 
     `view` is the Rendered viewport's camera, rendered instead of the scene camera. The viewport exports
     while Blender evaluates its depsgraph (`view_update`), when the depsgraph must not be updated: nothing
-    is tagged, and the World and render settings are read from the original scene (their evaluated copies
-    do not follow add-on property edits; those of materials and lights do, and a viewport's depsgraph
+    is tagged, and the settings of materials, lights, the World and the scene are read from their
+    original data blocks instead (the evaluated copies may be stale, see above; the viewport's depsgraph
     writes animated values back to the originals)."""
-    if view is None:
+    originals = view is not None
+    if not originals:
         _synchronise(depsgraph)
     scene = depsgraph.scene_eval
-    settings_scene = scene if view is None else depsgraph.scene.original
+    settings_scene = depsgraph.scene.original if originals else scene
     warnings = unsupported_settings(scene)
     camera = view or export_camera(scene, scene.camera.evaluated_get(depsgraph) if scene.camera else None)
     media, lights = [], []
@@ -113,13 +117,13 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
     for instance in depsgraph.object_instances:  # each instance's object lives only for this iteration
         obj = instance.object
         if obj.type == "LIGHT":
-            light = export_light(obj, instance.matrix_world)
+            light = export_light(obj.original if originals else obj, instance.matrix_world)
             if light is None:
                 warnings.append(f"light {obj.name!r}: {obj.data.type.lower()} lights are not supported, skipped")
             else:
                 lights.append(light)
         else:
-            medium = _medium(instance, depsgraph, volume_owners)
+            medium = _medium(instance, depsgraph, volume_owners, originals)
             if medium is not None:
                 media.append(medium)
     world = export_world(settings_scene.world)
