@@ -1,4 +1,5 @@
-"""The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders.
+"""The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders, and the
+Rendered viewport.
 
 Each frame is exported from the render depsgraph and rendered, here or on the Dask farm of the Render
 settings' scheduler address, in passes of doubling sample counts cut into units of about a quarter of
@@ -17,9 +18,20 @@ fluid smoke and fire, force fields and rigid bodies, particles (they instance vo
 custom properties. Those for what it does not render are left out (`NOT_RENDERED`): cloth, soft bodies,
 dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The
 viewport's Material Preview uses EEVEE.
+
+The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera
+(built from the 3D view's matrices, `region_camera`) at the Viewport Samples and hands it to the engine's
+`ViewportRenderer` (addon/viewport_render.py), which restarts its background render; `view_draw`
+restarts it when the view moved or was resized, draws the latest image through the scene's colour
+management (`bind_display_space_shader`, addon/viewport_draw.py) and, while a render is in flight, asks
+for the next redraw (`tag_redraw`, as Blender's own engine template does; no timers). Bad input stops
+the render and its message shows in the viewport's stats line.
 """
 
+import dataclasses
+
 import bpy
+import gpu
 
 from . import dispatch, render_export
 from .export.scene import export_scene
@@ -28,6 +40,8 @@ from .props.render import ENGINE_ID
 from .tracer.errors import SpectralError
 from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
 from .tracer.progress import Throttle, TimeLeft
+from .viewport_draw import ViewportImage
+from .viewport_render import ViewportRenderer, view_camera
 
 # The Render Result is rewritten at most every RESULT_SECONDS, and less often when writing it costs more
 # than 1/RESULT_COST_RATIO of the time between writes (a 1920×1080 film takes a while to convert).
@@ -82,6 +96,53 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             self.report({"ERROR"}, str(problem))
         self.end_result(result)
 
+    def view_update(self, context, depsgraph):
+        """Blender changed something (objects, materials, lights, World, settings): export the scene
+        through the view's camera and render it again. Blender is evaluating the depsgraph meanwhile."""
+        viewport = self._viewport()
+        settings = depsgraph.scene.spectral
+        try:
+            export = export_scene(depsgraph, view=region_camera(context))
+        except SpectralError as problem:
+            self.viewport_notes = []
+            viewport.fail(str(problem))
+            return
+        emulation = ["the viewport shows the tracer (Cycles emulation: Render to Image)"]
+        self.viewport_notes = export.warnings + (emulation if settings.renderer == "CYCLES" else [])
+        scene = export.scene
+        scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spp=settings.preview_samples))
+        viewport.render(scene, settings.scheduler_address)
+
+    def view_draw(self, context, depsgraph):
+        """Draw the latest image, after restarting the render if the view moved or was resized; while a
+        render is in flight, ask for another redraw to show its progress."""
+        viewport = self._viewport()
+        viewport.look_through(region_camera(context))
+        frame = viewport.frame
+        if frame is not None:
+            gpu.state.blend_set("ALPHA_PREMULT")
+            self.bind_display_space_shader(depsgraph.scene)
+            self.viewport_image.draw(frame.pixels, context.region.width, context.region.height)
+            self.unbind_display_space_shader()
+            gpu.state.blend_set("NONE")
+        self._show_stats(" | ".join(["Viewport: " + viewport.status, *self.viewport_notes]))
+        if viewport.busy:
+            self.tag_redraw()
+
+    def _viewport(self) -> ViewportRenderer:
+        """This engine's viewport renderer (an engine draws one 3D view), made on first use."""
+        if getattr(self, "viewport", None) is None:
+            self.viewport, self.viewport_image, self.viewport_notes = ViewportRenderer(), ViewportImage(), []
+        return self.viewport
+
+    def __del__(self):
+        try:
+            viewport = getattr(self, "viewport", None)
+        except ReferenceError:  # Blender freed the engine first
+            return
+        if viewport is not None:
+            viewport.close()
+
     def _show_stats(self, text: str) -> None:
         self.update_stats("", f"Spectral Volume | {text}")
 
@@ -108,6 +169,13 @@ NOT_RENDERED = ("TEXTURE_PT_", "NODE_PT_texture", "PHYSICS_PT_cloth", "PHYSICS_P
                 "DATA_PT_context_lightprobe", "RENDER_PT_stereoscopy", "RENDER_PT_output_views",
                 "DATA_PT_camera_stereoscopy")
 _panels_shown = []
+
+
+def region_camera(context):
+    """The tracer Camera of the context's 3D view, at its region's size (in camera view, the view's
+    matrices are those of the scene camera, zoomed and offset as the view shows its frame)."""
+    view = context.region_data
+    return view_camera(view.view_matrix, view.window_matrix, context.region.width, context.region.height)
 
 
 def _panel_classes(base=bpy.types.Panel):
