@@ -5,8 +5,9 @@ one background thread.
 view's camera and the Viewport Samples): the render in flight stops at its next unit of work and the
 new one starts. Each render goes through the resolution steps of `schedule` (1/8, 1/4 and 1/2 of the
 view's pixels per axis, one sample each) and then renders the full view up to the scene's sample count,
-whose passes refine the image. `frame` is the latest image, at the view's size (low resolutions scaled up
-by nearest neighbour), for the draw step to pick up on the main thread. One thread renders every
+whose passes refine the image (its first pass fills in the half-resolution image as it goes). `frame`
+is the latest image, at the view's size (low resolutions scaled up by nearest neighbour), for the draw
+step to pick up on the main thread. One thread renders every
 request in turn, so two kernels never run at once and a burst of edits renders only the last one. The
 thread never touches `bpy`; renders go through `dispatch` (this computer or the Dask farm), like F12's.
 """
@@ -97,10 +98,21 @@ def view_pixels(film, width: int, height: int) -> np.ndarray:
     return pixels[rows[:, None], columns[None, :]]
 
 
+def filled(pixels: np.ndarray, film, behind: np.ndarray | None) -> np.ndarray:
+    """`pixels` of a full-size `film` whose first pass is still under way, with the pixels it has no sample
+    for yet taken from `behind` (the previous image, the same size), so no holes show."""
+    holes = (film.pixel_samples.min(axis=0) == 0)[::-1]  # bottom row first, as the pixels
+    if behind is None or behind.shape != pixels.shape or not holes.any():
+        return pixels
+    pixels[holes] = behind[holes]
+    return pixels
+
+
 @dataclass(frozen=True)
 class Frame:
     """An image for the draw step: `pixels` (see `view_pixels`), rendered at `resolution` (width, height)
-    with `samples` per pixel, for request number `request`."""
+    with `samples` per pixel (0 while the full view's first pass fills the previous image), for request
+    number `request`."""
 
     pixels: np.ndarray
     resolution: tuple[int, int]
@@ -210,10 +222,13 @@ class ViewportRenderer:
         def progress(film, fraction):
             if last:
                 self._show(number, status=f"{int(fraction * step.samples)}/{step.samples} samples")
-                if film.samples.min() >= 1 and throttle.due():  # every pixel has a sample: no holes
+                if throttle.due():
                     with throttle.timed():
-                        self._show(number, frame=Frame(view_pixels(film, width, height), (step.width, step.height),
-                                                       int(film.samples.min()), number))
+                        shown = self.frame
+                        behind = shown.pixels if shown is not None and shown.request == number else None
+                        pixels = filled(view_pixels(film, width, height), film, behind)
+                        self._show(number, frame=Frame(pixels, (step.width, step.height), int(film.samples.min()),
+                                                       number))
 
         result = self._run(step_scene, scheduler, spp=step.samples, progress=progress,
                            cancel=lambda: self._cancelled(number), notice=lambda text: self._show(number, status=text),

@@ -22,8 +22,8 @@ from addon.tracer.film import Film
 from addon.tracer.lowering import camera_extent
 from addon.tracer.render import RenderResult, render
 from addon.tracer.scene import Camera, look_at
-from addon.viewport_render import (RESOLUTION_DIVISORS, Step, ViewportRenderer, resized, schedule, view_camera,
-                                   view_pixels)
+from addon.viewport_render import (RESOLUTION_DIVISORS, Step, ViewportRenderer, filled, resized, schedule,
+                                   view_camera, view_pixels)
 from tests.addon.builders import basic_scene, tiny_render
 from tests.support import scenes
 
@@ -77,6 +77,16 @@ def test_view_pixels_scale_up_by_nearest_neighbour_bottom_row_first():
     np.testing.assert_array_equal(pixels[2:, 3:], np.broadcast_to(low[1, 1], (2, 2, 4)))
     np.testing.assert_array_equal(pixels[:, :, 3], 1.0)
     np.testing.assert_array_equal(view_pixels(film, 2, 2), low)
+
+
+def test_the_full_views_first_pass_fills_the_previous_image():
+    film = Film(3, 2)
+    film.add(0, 0, 0, np.full((1, 3, 3), 2.0), np.zeros((1, 3, 3)), 1)  # the top row has its first sample
+    behind = np.full((2, 3, 4), 0.5, dtype=np.float32)
+    pixels = filled(view_pixels(film, 3, 2), film, behind)
+    np.testing.assert_array_equal(pixels[1], view_pixels(_constant_film(3, 2, 2.0), 3, 2)[1])  # top row: rendered
+    np.testing.assert_array_equal(pixels[0], behind[0])  # bottom row (first in the pixels): the previous image
+    np.testing.assert_array_equal(filled(view_pixels(film, 3, 2), film, None), view_pixels(film, 3, 2))
 
 
 class StandInRun:
