@@ -7,9 +7,9 @@ new one starts. Each render goes through the resolution steps of `schedule` (1/8
 view's pixels per axis, one sample each) and then renders the full view up to the scene's sample count,
 whose passes refine the image (its first pass fills in the half-resolution image as it goes). `frame`
 is the latest image, at the view's size (low resolutions scaled up by nearest neighbour), for the draw
-step to pick up on the main thread. One thread renders every
-request in turn, so two kernels never run at once and a burst of edits renders only the last one. The
-thread never touches `bpy`; renders go through `dispatch` (this computer or the Dask farm), like F12's.
+step to pick up on the main thread. One thread renders every request in turn, so two kernels never run
+at once and a burst of edits renders only the last one. The thread never touches `bpy`; renders go
+through `dispatch` (this computer or the Dask farm), like F12's.
 """
 
 import dataclasses

@@ -15,9 +15,9 @@ instance matrix. Nothing is written to disk here and the Blender data is not cha
 
 The add-on exports render depsgraphs (F12, and `addon.render_export` for everything else) and the
 Rendered viewport's own (see `export_scene`); scripts may pass a viewport one. Setting an add-on property
-does not always tag its data block for re-evaluation (the World's and the scene's settings), so a viewport
-depsgraph may hold stale copies of the materials, lights, worlds and scene: those are tagged and
-re-evaluated first. A render's depsgraph is built fresh and needs none of this. Objects are not
+does not tag its data block for re-evaluation, so a viewport depsgraph may hold stale copies of the
+materials, lights, worlds and scene: those are tagged and re-evaluated first (the Rendered viewport
+reads the originals instead). A render's depsgraph is built fresh and needs none of this. Objects are not
 tagged (that would re-run their modifiers and simulations): their settings, the density grid's name and the
 voxel size, are read from the original objects.
 """
