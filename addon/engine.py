@@ -1,5 +1,5 @@
-"""The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders, and the
-Rendered viewport.
+"""The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders, material,
+light and World previews (thumbnails, addon/preview.py), and the Rendered viewport.
 
 Each frame is exported from the render depsgraph and rendered, here or on the Dask farm of the Render
 settings' scheduler address, in passes of doubling sample counts cut into units of about a quarter of
@@ -10,7 +10,8 @@ written too. While the kernel compiles (the first render), the stats line says s
 reported as an error and renders nothing, so Blender writes no output file. With the Cycles emulation
 chosen as renderer, F12 reports an error instead: Cycles cannot render from inside another engine's
 render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
-CLI), a render exports its depsgraph for it and renders nothing.
+CLI), a render exports its depsgraph for it and renders nothing. A preview renders Blender's preview
+scene as a render does, lit as `preview_scene` says, and reports nothing.
 
 While it is the engine, those of Blender's generic panels (offered for every engine) that change what it
 renders stay visible: camera, lights, volume file and grids, mesh data, output and colour management,
@@ -36,6 +37,7 @@ import gpu
 from . import dispatch, render_export
 from .export.scene import export_scene
 from .pixels import blender_rows, with_alpha
+from .preview import preview_scene
 from .props.render import ENGINE_ID
 from .tracer.errors import SpectralError
 from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
@@ -52,7 +54,7 @@ RESULT_COST_RATIO = 10
 class SpectralVolumeEngine(bpy.types.RenderEngine):
     bl_idname = ENGINE_ID
     bl_label = "Spectral Volume"
-    bl_use_preview = False
+    bl_use_preview = True
     bl_use_eevee_viewport = True
 
     def update_render_passes(self, scene=None, renderlayer=None):
@@ -62,20 +64,22 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     def render(self, depsgraph):
         if render_export.capture(depsgraph):  # Render to Image, Export Scene, the CLI: export only
             return
-        if depsgraph.scene.original.spectral.renderer == "CYCLES":
+        settings = depsgraph.scene.original.spectral
+        if settings.renderer == "CYCLES":
             self.report({"ERROR"}, "the Cycles emulation cannot run inside a render engine's render: use Render to "
                         "Image (Spectral sidebar tab) or the command line, or choose the Tracer renderer")
             return
         try:
             export = export_scene(depsgraph)
         except SpectralError as problem:
-            self.report({"ERROR"}, str(problem))
+            self._report_unless_preview({"ERROR"}, str(problem))
             return
         for warning in export.warnings:
-            self.report({"WARNING"}, warning)
-        camera = export.scene.camera  # with Render Region on, it sees the region: Blender crops or places it
+            self._report_unless_preview({"WARNING"}, warning)
+        scene = preview_scene(export.scene, settings.preview_samples) if self.is_preview else export.scene
+        camera = scene.camera  # with Render Region on, it sees the region: Blender crops or places it
         result = self.begin_result(0, 0, camera.width, camera.height)
-        spp = export.scene.settings.spp
+        spp = scene.settings.spp
         time_left = TimeLeft()
         throttle = Throttle(RESULT_SECONDS, RESULT_COST_RATIO)
 
@@ -89,12 +93,18 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
                     self._write(result, film, preview=True)
 
         try:
-            rendered = dispatch.run(export.scene, depsgraph.scene.original.spectral.scheduler_address,
-                                    progress=progress, cancel=self.test_break, notice=self._show_stats)
+            rendered = dispatch.run(scene, settings.scheduler_address, progress=progress, cancel=self.test_break,
+                                    notice=self._show_stats)
             self._write(result, rendered.film)
         except SpectralError as problem:
-            self.report({"ERROR"}, str(problem))
+            self._report_unless_preview({"ERROR"}, str(problem))
         self.end_result(result)
+
+    def _report_unless_preview(self, kind: set, message: str) -> None:
+        """Report to the user, except from a preview (a thumbnail of Blender's preview scene: its area lights,
+        say, are nothing the user can act on, and each thumbnail would repeat them)."""
+        if not self.is_preview:
+            self.report(kind, message)
 
     def view_update(self, context, depsgraph):
         """Blender changed something (objects, materials, lights, World, settings): export the scene
