@@ -6,19 +6,18 @@ import pytest
 
 from addon import dispatch
 from addon.preview import preview_scene
-from addon.tracer.scene import look_at
+from addon.tracer.scene import Camera, look_at
 from tests.support import scenes
 
 bpy = pytest.importorskip("bpy")
 
 
 def test_a_material_preview_gets_a_key_light_and_a_light_preview_keeps_its_light():
-    camera = scenes.perspective_camera()
-    camera = type(camera)(to_world=look_at((0.0, -5.0, 0.0), (0.0, 0.0, 0.0)), width=16, height=16)
+    camera = Camera(to_world=look_at((0.0, -5.0, 0.0), (0.0, 0.0, 0.0)), width=16, height=16)
     material = preview_scene(scenes.scene(camera, lights=[scenes.environment()], spp=64), samples=5)
     assert material.settings.spp == 5 and [light.kind for light in material.lights] == ["environment", "sun"]
     key = material.lights[1].direction
-    assert key[0] < 0 and key[2] > 0 and key[1] < 0  # from the camera's left, above, on its side
+    assert key[0] < 0 and key[2] > 0 and key[1] < 0  # towards the camera's left, up, and back towards it
     lit = preview_scene(scenes.scene(camera, lights=[scenes.environment(), scenes.sun((0, 0, 1))]), samples=5)
     assert [light.kind for light in lit.lights] == ["environment", "sun"] and lit.lights[1].direction[2] == 1
 
