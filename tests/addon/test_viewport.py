@@ -5,7 +5,6 @@ called here with stand-ins for the engine and the 3D view; drawing goes to a `gp
 
 import dataclasses
 import math
-import threading
 import time
 from types import SimpleNamespace
 
@@ -21,7 +20,7 @@ from addon.tracer.errors import SpectralError
 from addon.tracer.film import Film
 from addon.tracer.lowering import camera_extent
 from addon.tracer.render import RenderResult, render
-from addon.tracer.scene import Camera, look_at
+from addon.tracer.scene import look_at
 from addon.viewport_render import (RESOLUTION_DIVISORS, Step, ViewportRenderer, filled, resized, schedule,
                                    view_camera, view_pixels)
 from tests.addon.builders import basic_scene, tiny_render
