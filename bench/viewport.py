@@ -8,7 +8,7 @@ changes, so every sample changes) and timed as the viewport's main thread and re
 - export: the viewport's export of the scene on the main thread (`export_scene(depsgraph, view=...)`);
 - stop: from the restart (the export done) until the render in flight returned;
 - first image: from the edit until the new render's first (1/8 resolution) image;
-- full view: from the edit until its first image at full resolution, every pixel sampled;
+- every pixel sampled: from the edit until its first full-resolution image with a sample in every pixel;
 then, for up to `--seconds`, the images the draw step would pick up (polled every 5 ms, as view_draw's
 redraws would) are counted: refreshes per second, and the samples per second they show.
 
@@ -111,7 +111,8 @@ def main(argv=None) -> None:
     print(machine())
     print(f"{args.size}×{args.size} view, {args.samples} viewport samples, refinement measured for up to "
           f"{args.seconds:g} s")
-    print("| demo | export | stop | first image | full view | refreshes/s | samples/s | samples reached |")
+    print(f"| demo | export | stop | first image (1/8) | every pixel sampled | refreshes/s | samples/s | "
+          f"samples after {args.seconds:g} s |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     with addon_registered():
         for demo in args.demos or build_blends.DEMO_SCENES:
