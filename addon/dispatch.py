@@ -12,11 +12,13 @@ from .tracer.scene import Scene
 
 
 def run(scene: Scene, scheduler: str = "", *, spp: int | None = None, progress=None, cancel=None,
-        notice=None) -> RenderResult:
+        notice=None, unit_seconds: float = local.UNIT_SECONDS) -> RenderResult:
     """`notice(text)` is told what a local render waits for before it starts (the kernel compiling); the
-    farm's workers compile their own kernels."""
+    farm's workers compile their own kernels. A local render works in units of about `unit_seconds` (the
+    most a cancel waits); the farm's units are its tiles."""
     if not scheduler:
-        return local.render(scene, spp=spp, progress=progress, cancel=cancel, notice=notice)
+        return local.render(scene, spp=spp, progress=progress, cancel=cancel, notice=notice,
+                            unit_seconds=unit_seconds)
     from .tracer import distributed
 
     return distributed.render(scene, scheduler=scheduler, spp=spp, progress=progress, cancel=cancel)

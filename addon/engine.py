@@ -1,4 +1,5 @@
-"""The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders.
+"""The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders, material,
+light and World previews (thumbnails, addon/preview.py), and the Rendered viewport.
 
 Each frame is exported from the render depsgraph and rendered, here or on the Dask farm of the Render
 settings' scheduler address, in passes of doubling sample counts cut into units of about a quarter of
@@ -9,7 +10,8 @@ written too. While the kernel compiles (the first render), the stats line says s
 reported as an error and renders nothing, so Blender writes no output file. With the Cycles emulation
 chosen as renderer, F12 reports an error instead: Cycles cannot render from inside another engine's
 render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
-CLI), a render exports its depsgraph for it and renders nothing.
+CLI), a render exports its depsgraph for it and renders nothing. A preview renders Blender's preview
+scene as a render does, lit as `preview_scene` says, and reports nothing.
 
 While it is the engine, those of Blender's generic panels (offered for every engine) that change what it
 renders stay visible: camera, lights, volume file and grids, mesh data, output and colour management,
@@ -17,19 +19,31 @@ fluid smoke and fire, force fields and rigid bodies, particles (they instance vo
 custom properties. Those for what it does not render are left out (`NOT_RENDERED`): cloth, soft bodies,
 dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The
 viewport's Material Preview uses EEVEE.
+
+The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera
+(built from the 3D view's matrices, `region_camera`) at the Viewport Samples and hands it to the engine's
+`ViewportRenderer` (addon/viewport_render.py), which restarts its background render; `view_draw`
+restarts it when the view moved or was resized, draws the latest image through the scene's colour
+management (`bind_display_space_shader`, addon/viewport_draw.py) and, while a render is in flight, asks
+for the next redraw (`tag_redraw`, as Blender's own engine template does; no timers). Bad input stops
+the render and its message shows in the viewport's stats line.
 """
 
-import time
+import dataclasses
 
 import bpy
+import gpu
 
 from . import dispatch, render_export
 from .export.scene import export_scene
 from .pixels import blender_rows, with_alpha
+from .preview import preview_scene
 from .props.render import ENGINE_ID
 from .tracer.errors import SpectralError
 from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
-from .tracer.progress import TimeLeft
+from .tracer.progress import Throttle, TimeLeft
+from .viewport_draw import ViewportImage
+from .viewport_render import ViewportRenderer, view_camera
 
 # The Render Result is rewritten at most every RESULT_SECONDS, and less often when writing it costs more
 # than 1/RESULT_COST_RATIO of the time between writes (a 1920×1080 film takes a while to convert).
@@ -40,7 +54,7 @@ RESULT_COST_RATIO = 10
 class SpectralVolumeEngine(bpy.types.RenderEngine):
     bl_idname = ENGINE_ID
     bl_label = "Spectral Volume"
-    bl_use_preview = False
+    bl_use_preview = True
     bl_use_eevee_viewport = True
 
     def update_render_passes(self, scene=None, renderlayer=None):
@@ -50,43 +64,94 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     def render(self, depsgraph):
         if render_export.capture(depsgraph):  # Render to Image, Export Scene, the CLI: export only
             return
-        if depsgraph.scene.original.spectral.renderer == "CYCLES":
+        settings = depsgraph.scene.original.spectral
+        if settings.renderer == "CYCLES":
             self.report({"ERROR"}, "the Cycles emulation cannot run inside a render engine's render: use Render to "
                         "Image (Spectral sidebar tab) or the command line, or choose the Tracer renderer")
             return
         try:
             export = export_scene(depsgraph)
         except SpectralError as problem:
-            self.report({"ERROR"}, str(problem))
+            self._report_unless_preview({"ERROR"}, str(problem))
             return
         for warning in export.warnings:
-            self.report({"WARNING"}, warning)
-        camera = export.scene.camera  # with Render Region on, it sees the region: Blender crops or places it
+            self._report_unless_preview({"WARNING"}, warning)
+        scene = preview_scene(export.scene, settings.preview_samples) if self.is_preview else export.scene
+        camera = scene.camera  # with Render Region on, it sees the region: Blender crops or places it
         result = self.begin_result(0, 0, camera.width, camera.height)
-        spp = export.scene.settings.spp
+        spp = scene.settings.spp
         time_left = TimeLeft()
-        written_at, write_seconds = time.perf_counter(), 0.0
+        throttle = Throttle(RESULT_SECONDS, RESULT_COST_RATIO)
 
         def progress(film, fraction):
-            nonlocal written_at, write_seconds
             self.update_progress(fraction)
             left = time_left(fraction)
             self._show_stats(f"{int(fraction * spp)}/{spp} samples"
                              + ("" if left is None else f" | about {left:.0f} s left"))
-            now = time.perf_counter()
-            due = now - written_at >= max(RESULT_SECONDS, RESULT_COST_RATIO * write_seconds)
-            if due and not self.test_break():  # after Esc, stop at once: the full result is written below
-                self._write(result, film, preview=True)
-                written_at = time.perf_counter()
-                write_seconds = written_at - now
+            if throttle.due() and not self.test_break():  # after Esc, stop at once: the full result is written below
+                with throttle.timed():
+                    self._write(result, film, preview=True)
 
         try:
-            rendered = dispatch.run(export.scene, depsgraph.scene.original.spectral.scheduler_address,
-                                    progress=progress, cancel=self.test_break, notice=self._show_stats)
+            rendered = dispatch.run(scene, settings.scheduler_address, progress=progress, cancel=self.test_break,
+                                    notice=self._show_stats)
             self._write(result, rendered.film)
         except SpectralError as problem:
-            self.report({"ERROR"}, str(problem))
+            self._report_unless_preview({"ERROR"}, str(problem))
         self.end_result(result)
+
+    def _report_unless_preview(self, kind: set, message: str) -> None:
+        """Report to the user, except from a preview (a thumbnail of Blender's preview scene: its area lights,
+        say, are nothing the user can act on, and each thumbnail would repeat them)."""
+        if not self.is_preview:
+            self.report(kind, message)
+
+    def view_update(self, context, depsgraph):
+        """Blender changed something (objects, materials, lights, World, settings): export the scene
+        through the view's camera and render it again. Blender is evaluating the depsgraph meanwhile."""
+        viewport = self._viewport()
+        settings = depsgraph.scene.spectral
+        try:
+            export = export_scene(depsgraph, view=region_camera(context))
+        except SpectralError as problem:
+            self.viewport_notes = []
+            viewport.fail(str(problem))
+            return
+        emulation = ["the viewport shows the tracer (Cycles emulation: Render to Image)"]
+        self.viewport_notes = export.warnings + (emulation if settings.renderer == "CYCLES" else [])
+        scene = export.scene
+        scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spp=settings.preview_samples))
+        viewport.render(scene, settings.scheduler_address)
+
+    def view_draw(self, context, depsgraph):
+        """Draw the latest image, after restarting the render if the view moved or was resized; while a
+        render is in flight, ask for another redraw to show its progress."""
+        viewport = self._viewport()
+        viewport.look_through(region_camera(context))
+        frame = viewport.frame
+        if frame is not None:
+            gpu.state.blend_set("ALPHA_PREMULT")
+            self.bind_display_space_shader(depsgraph.scene)
+            self.viewport_image.draw(frame.pixels, context.region.width, context.region.height)
+            self.unbind_display_space_shader()
+            gpu.state.blend_set("NONE")
+        self._show_stats(" | ".join(["Viewport: " + viewport.status, *self.viewport_notes]))
+        if viewport.busy:
+            self.tag_redraw()
+
+    def _viewport(self) -> ViewportRenderer:
+        """This engine's viewport renderer (an engine draws one 3D view), made on first use."""
+        if getattr(self, "viewport", None) is None:
+            self.viewport, self.viewport_image, self.viewport_notes = ViewportRenderer(), ViewportImage(), []
+        return self.viewport
+
+    def __del__(self):
+        try:
+            viewport = getattr(self, "viewport", None)
+        except ReferenceError:  # Blender freed the engine first
+            return
+        if viewport is not None:
+            viewport.close()
 
     def _show_stats(self, text: str) -> None:
         self.update_stats("", f"Spectral Volume | {text}")
@@ -114,6 +179,13 @@ NOT_RENDERED = ("TEXTURE_PT_", "NODE_PT_texture", "PHYSICS_PT_cloth", "PHYSICS_P
                 "DATA_PT_context_lightprobe", "RENDER_PT_stereoscopy", "RENDER_PT_output_views",
                 "DATA_PT_camera_stereoscopy")
 _panels_shown = []
+
+
+def region_camera(context):
+    """The tracer Camera of the context's 3D view, at its region's size (in camera view, the view's
+    matrices are those of the scene camera, zoomed and offset as the view shows its frame)."""
+    view = context.region_data
+    return view_camera(view.view_matrix, view.window_matrix, context.region.width, context.region.height)
 
 
 def _panel_classes(base=bpy.types.Panel):

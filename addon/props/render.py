@@ -14,6 +14,9 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
     """Per-scene render settings of the spectral tracer (mirrors addon.tracer.scene.RenderSettings)."""
 
     samples: bpy.props.IntProperty(name="Samples", description="Paths per pixel", default=64, min=1, soft_max=4096)
+    preview_samples: bpy.props.IntProperty(
+        name="Viewport Samples", default=32, min=1, soft_max=4096,
+        description="Paths per pixel of the Rendered viewport: it refines its image up to this many, then stops")
     seed: bpy.props.IntProperty(name="Seed", description="Random seed: the same seed gives the same image",
                                 default=DEFAULTS.seed, min=0)
     max_bounces: bpy.props.IntProperty(name="Max Bounces", description="Most scattering events along a path",

@@ -5,9 +5,11 @@ cancellation between units.
 `render_unit` is the pure unit of work (also what distributed workers run): its result depends only on
 (scene, band, sample range, tile, seed), so any split of the work gives the same image. The passes
 (sample ranges) depend only on the sample count, and every pixel receives them in order, so the film's
-sums are formed exactly as by `distributed.render`, whatever the tiles.
+sums are formed exactly as by `distributed.render`, whatever the tiles. Renders running at once in one
+process (the Rendered viewport's and F12's) take turns unit by unit.
 """
 
+import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -78,6 +80,9 @@ def pass_sizes(spp: int, first: int = 1, largest: int = 16) -> list[int]:
     return [count for _, count in passes(spp, first, largest)]
 
 
+# Renders of one process (the Rendered viewport's and F12's) take turns unit by unit: Numba's workqueue
+# threading layer aborts when two threads launch kernels at once.
+KERNEL_LAUNCH = threading.Lock()
 UNIT_SECONDS = 0.2  # aimed below the 0.25 s a unit may take, since tiles differ in cost
 FIRST_UNIT = 1024  # pixel-samples of the first unit, before any throughput is known
 GROWTH = 4  # a unit has at most this many times the pixel-samples of the largest one measured
@@ -166,10 +171,12 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
         if cancel is not None and cancel():
             cancelled = True
             break
-        unit_start = time.perf_counter()
-        sum_xyz, sum_sq = render_unit(bands[band], band, samples, tile, seed, backend)
+        with KERNEL_LAUNCH:
+            unit_start = time.perf_counter()
+            sum_xyz, sum_sq = render_unit(bands[band], band, samples, tile, seed, backend)
+            unit_seconds_taken = time.perf_counter() - unit_start
         size = samples[1] - samples[0]
-        tiler.measured(tile, size, time.perf_counter() - unit_start)
+        tiler.measured(tile, size, unit_seconds_taken)
         film.add(band, tile[1], tile[0], sum_xyz, sum_sq, size)
         done += tile[2] * tile[3] * size
         if progress is not None:

@@ -10,7 +10,9 @@ from .panel import SpectralPanel
 def draw_render_main(layout, scene) -> None:
     settings = scene.spectral
     layout.prop(settings, "renderer")
-    layout.prop(settings, "samples")
+    column = layout.column(align=True)
+    column.prop(settings, "samples")
+    column.prop(settings, "preview_samples", text="Viewport")
     layout.prop(settings, "max_bounces")
     layout.prop(settings, "seed")
     if settings.renderer == "CYCLES":

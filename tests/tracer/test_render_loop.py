@@ -3,6 +3,7 @@ the same film for any split of the work, and per-wavelength bands that together 
 spectrum."""
 
 import math
+import threading
 
 import numpy as np
 import pytest
@@ -149,6 +150,35 @@ def test_any_split_into_units_gives_the_same_film(backend):
     pieces = render(scene, backend=backend, unit_seconds=TINY_UNITS).film
     assert np.array_equal(whole.pixel_samples, pieces.pixel_samples)
     assert np.array_equal(whole.sum_xyz, pieces.sum_xyz) and np.array_equal(whole.sum_sq, pieces.sum_sq)
+
+
+def test_renders_on_two_threads_take_turns_and_give_their_own_images(monkeypatch):
+    """The Rendered viewport and F12 may render at once: their kernel launches never overlap (Numba's
+    workqueue threading layer would abort), and each gets the image it would get alone."""
+    from addon.tracer import render as loop
+
+    scenes = [furnace(width=5, height=4, spp=6, seed=seed) for seed in (1, 2)]
+    alone = [render(scene).film for scene in scenes]
+    unlocked, real_unit = [], loop.render_unit
+
+    def unit(*args):
+        unlocked.append(not loop.KERNEL_LAUNCH.locked())
+        return real_unit(*args)
+
+    monkeypatch.setattr(loop, "render_unit", unit)
+    films = [None, None]
+
+    def render_one(index):
+        films[index] = render(scenes[index], unit_seconds=TINY_UNITS).film
+
+    threads = [threading.Thread(target=render_one, args=(index,)) for index in range(2)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(120)
+    assert len(unlocked) >= 2 * len(pass_sizes(6)) and not any(unlocked)
+    for film, reference in zip(films, alone):
+        assert np.array_equal(film.sum_xyz, reference.sum_xyz)
 
 
 def test_the_first_render_says_when_the_kernel_compiles(monkeypatch):
