@@ -19,7 +19,6 @@ import os
 import sys
 import threading
 import time
-from contextlib import contextmanager
 from pathlib import Path
 
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, InTreeCacheLocator, NullCache
@@ -30,9 +29,6 @@ TRACER = Path(__file__).resolve().parent.parent
 PACKAGE = __name__.rpartition(".kernels.")[0]  # "addon.tracer" or "bl_ext.<repo>.spectral_volume.addon.tracer"
 KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.py", "kernels/fluorescent_reservoir.py",
                   "phase.py", "binned.py", "planck.py", "shared_math.py", "wavelengths.py")
-# LLVM's optimisation level for the kernel's IR (Numba's default is 3). Measured on the 2-core VM: level 1
-# compiles in 101 s of CPU where level 3 took 170 s, and renders as fast (bench/README.md, "Compile time").
-OPTIMISATION_LEVEL = 1
 COMPILE_SECONDS_FILE = "compile-seconds.txt"
 DEFAULT_COMPILE_SECONDS = 170.0  # until measured here: a cold compile took 170 s of CPU on the 2-core VM (bench/README.md)
 NOTICE_AFTER_SECONDS = 1.0  # loading a cached kernel takes less; compiling it takes minutes
@@ -74,8 +70,7 @@ def cache_key() -> dict:
     # otherwise (tools/cpu_variants.py compiles for other CPUs).
     cpu = numba.config.CPU_NAME or binding.get_host_cpu_name()
     features = numba.config.CPU_FEATURES if numba.config.CPU_FEATURES is not None else features
-    return {"sources": sources_digest(), "optimisation": OPTIMISATION_LEVEL, "package": PACKAGE,
-            "python": sys.implementation.cache_tag,
+    return {"sources": sources_digest(), "package": PACKAGE, "python": sys.implementation.cache_tag,
             "numba": numba.__version__, "llvmlite": llvmlite.__version__, "cpu": cpu, "cpu_features": features}
 
 
@@ -146,39 +141,14 @@ class KernelCache(FunctionCache):
             pass
 
 
-@contextmanager
-def optimisation_level(level: int):
-    """LLVM's optimisation level for what Numba compiles meanwhile (`numba.config.OPT`, read by each
-    module's optimisation passes). A Numba without that setting compiles at its own level."""
-    from numba.core import config
-
-    default = config.OPT
-    try:
-        config.OPT = config._process_opt_level(str(level))
-    except (AttributeError, TypeError, ValueError):
-        yield
-        return
-    try:
-        yield
-    finally:
-        config.OPT = default
-
-
 def cached(dispatcher):
     """Give a Numba dispatcher (a kernel declared without `cache=True`) the kernel cache, or no cache
-    when the folder cannot be written, and compile it at `OPTIMISATION_LEVEL`."""
+    when the folder cannot be written."""
     _Locator.folder = _usable_folder()
     try:
         dispatcher._cache = KernelCache(dispatcher.py_func) if _Locator.folder is not None else NullCache()
     except (OSError, RuntimeError):  # RuntimeError: Numba found the folder unusable after all
         dispatcher._cache = NullCache()
-    compile_at_default_level = dispatcher.compile
-
-    def compile_at_our_level(signature):
-        with optimisation_level(OPTIMISATION_LEVEL):
-            return compile_at_default_level(signature)
-
-    dispatcher.compile = compile_at_our_level
     return dispatcher
 
 
