@@ -18,7 +18,7 @@ renders stay visible: camera, lights, volume file and grids, mesh data, output a
 fluid smoke and fire, force fields and rigid bodies, particles (they instance volumes), animation and
 custom properties. Those for what it does not render are left out (`NOT_RENDERED`): cloth, soft bodies,
 dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The
-viewport's Material Preview uses EEVEE.
+viewport's Material Preview uses EEVEE, with each spectral material's preview nodes (`material_preview`).
 
 The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera
 (built from the 3D view's matrices, `region_camera`) at the Viewport Samples and hands it to the engine's

@@ -7,7 +7,7 @@ so adding a class means adding it to its module's list, nowhere else.
 
 import bpy
 
-from . import cli, curves, engine
+from . import cli, curves, engine, material_preview
 from .operators import albedo_levels
 from .operators import emulation as emulation_operators
 from .operators import export as export_operators
@@ -18,7 +18,7 @@ from .operators import spectrum as spectrum_operators
 from .props import attach, light, material, render, spectrum
 from .ui import lighting, material as material_ui, presets as preset_ui, render as render_ui, sidebar
 
-MODULES = (curves, spectrum, material, light, render, attach, engine, spectrum_operators, preset_operators,
+MODULES = (curves, spectrum, material, light, render, attach, engine, material_preview, spectrum_operators, preset_operators,
            albedo_levels, export_operators, import_operators, emulation_operators, render_image, preset_ui,
            material_ui, lighting, render_ui, sidebar, cli)
 
