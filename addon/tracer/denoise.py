@@ -1,0 +1,98 @@
+"""Denoising of the film's display image with Intel Open Image Denoise (OIDN, through the `pyoidn` package).
+
+A display and output step: it takes the linear Rec.709 image (`Film.rgb()`, HDR) and returns a denoised
+copy; the film's XYZ and variance passes are never changed. OIDN takes no variance, so the variance is
+used beside it: where the film's estimate is already precise (relative standard error of the luminance,
+averaged over a small neighbourhood, below `PRECISE_ERROR`) the noisy pixel is kept, and the denoised one
+blends in as the error grows, so converged detail is not smoothed. The per-pixel variance means nothing
+below `MIN_VARIANCE_SAMPLES` samples (a pixel whose few samples all missed the smoke reads as exact), so
+`denoised_rgb` uses it only from there on. No albedo or normal feature passes: the kernel does not make
+them. Negative RGB (colours outside Rec.709) is clipped to 0 for OIDN's HDR filter.
+"""
+
+import numpy as np
+
+from .errors import SpectralError
+
+PRECISE_ERROR = 0.02  # relative standard error at and above which the denoised pixel is used alone
+MIN_VARIANCE_SAMPLES = 16  # below this many samples per pixel the variance is not used
+NEIGHBOURHOOD = 5  # side of the square over which each pixel's relative error is measured
+QUALITIES = ("high", "balanced", "fast")  # OIDN's: final renders, interactive, fastest
+
+
+def _load():
+    """The `pyoidn` module, or the reason it cannot be used here."""
+    try:
+        import pyoidn
+    except (ImportError, OSError) as problem:  # OSError: the bundled library cannot load on this machine
+        return None, f"Open Image Denoise is not available on this platform ({problem})"
+    return pyoidn, ""
+
+
+_pyoidn, UNAVAILABLE = _load()
+
+
+def available() -> bool:
+    """Whether this machine can denoise (the `pyoidn` package and its OIDN library load)."""
+    return _pyoidn is not None
+
+
+def _check_image(name: str, image, shape=None) -> np.ndarray:
+    image = np.asarray(image)
+    if image.ndim != 3 or image.shape[2] != 3 or 0 in image.shape:
+        raise SpectralError(f"the {name} image to denoise must be height × width × 3, not {image.shape}")
+    if shape is not None and image.shape != shape:
+        raise SpectralError(f"the {name} image is {image.shape}, but the image to denoise is {shape}")
+    if not np.issubdtype(image.dtype, np.number) or not np.isfinite(image).all():
+        raise SpectralError(f"the {name} image to denoise has non-finite values (NaN or infinity)")
+    return image
+
+
+def _box_mean(image: np.ndarray, size: int) -> np.ndarray:
+    """Mean over a size × size square around each pixel (edges repeated)."""
+    pad = size // 2
+    padded = np.pad(image, pad, mode="edge")
+    sums = np.cumsum(np.cumsum(padded, axis=0), axis=1)
+    sums = np.pad(sums, ((1, 0), (1, 0)))
+    height, width = image.shape
+    total = (sums[size:size + height, size:size + width] - sums[:height, size:size + width]
+             - sums[size:size + height, :width] + sums[:height, :width])
+    return total / (size * size)
+
+
+def noisy_weight(rgb: np.ndarray, variance: np.ndarray) -> np.ndarray:
+    """How much of each pixel stays noisy (1: precise enough to keep, 0: use the denoised pixel): from the
+    relative standard error of the luminance, averaged over `NEIGHBOURHOOD`, against `PRECISE_ERROR`."""
+    luminance = _box_mean(np.maximum(rgb, 0.0) @ np.array([0.2126, 0.7152, 0.0722]), NEIGHBOURHOOD)
+    floor = 1e-3 * max(float(luminance.mean()), 1e-12)  # black pixels of zero variance count as precise
+    error = np.sqrt(_box_mean(variance[..., 1], NEIGHBOURHOOD)) / np.maximum(luminance, floor)
+    return np.clip(1.0 - error / PRECISE_ERROR, 0.0, 1.0)
+
+
+def denoise(rgb, variance=None, quality: str = "high") -> np.ndarray:
+    """Denoised copy (float32) of a linear Rec.709 HDR image (height, width, 3). `variance`: the per-pixel
+    variance of the film's XYZ estimate (height, width, 3, as `Film.variance`), or None to denoise every
+    pixel fully; `quality`: one of `QUALITIES`. Raises SpectralError for bad input or without OIDN."""
+    rgb = _check_image("colour", rgb)
+    if quality not in QUALITIES:
+        raise SpectralError(f"denoise quality {quality!r} is not one of {', '.join(QUALITIES)}")
+    if variance is not None:
+        variance = _check_image("variance", variance, rgb.shape)
+    if _pyoidn is None:
+        raise SpectralError(UNAVAILABLE)
+    colour = np.ascontiguousarray(np.maximum(rgb, 0.0), dtype=np.float32)
+    try:
+        denoised = _pyoidn.denoise(colour, hdr=True, quality=quality)
+    except (RuntimeError, ValueError, TypeError) as problem:
+        raise SpectralError(f"Open Image Denoise failed: {problem}") from problem
+    if variance is None:
+        return denoised
+    keep = noisy_weight(rgb, variance)[..., None]
+    return (keep * rgb + (1.0 - keep) * denoised).astype(np.float32)
+
+
+def denoised_rgb(film, quality: str = "high") -> np.ndarray:
+    """The film's linear Rec.709 image, denoised; its variance guides the denoiser from
+    `MIN_VARIANCE_SAMPLES` samples per pixel on (see the module's docstring)."""
+    variance = film.variance if film.samples.min() >= MIN_VARIANCE_SAMPLES else None
+    return denoise(film.rgb(), variance, quality)
