@@ -93,6 +93,8 @@ def denoise(rgb, variance=None, quality: str = "high") -> np.ndarray:
 
 def denoised_rgb(film, quality: str = "high") -> np.ndarray:
     """The film's linear Rec.709 image, denoised; its variance guides the denoiser from
-    `MIN_VARIANCE_SAMPLES` samples per pixel on (see the module's docstring)."""
-    variance = film.variance if film.samples.min() >= MIN_VARIANCE_SAMPLES else None
+    `MIN_VARIANCE_SAMPLES` samples per pixel on (see the module's docstring). A film without sample counts
+    (the Cycles emulation's composite, whose variance comes from two renders) is denoised fully."""
+    samples = getattr(film, "samples", None)
+    variance = film.variance if samples is not None and samples.min() >= MIN_VARIANCE_SAMPLES else None
     return denoise(film.rgb(), variance, quality)
