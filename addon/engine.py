@@ -41,7 +41,7 @@ from .image_output import denoising
 from .pixels import blender_rows, with_alpha
 from .preview import preview_scene
 from .props.render import ENGINE_ID
-from .tracer.denoise import denoised_rgb
+from .tracer.denoise import available as denoise_available, denoised_rgb
 from .tracer.errors import SpectralError
 from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
 from .tracer.progress import Throttle, TimeLeft
@@ -125,7 +125,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
         self.viewport_notes = export.warnings + (emulation if settings.renderer == "CYCLES" else [])
         scene = export.scene
         scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spp=settings.preview_samples))
-        viewport.render(scene, settings.scheduler_address)
+        viewport.render(scene, settings.scheduler_address, settings.viewport_denoise and denoise_available())
 
     def view_draw(self, context, depsgraph):
         """Draw the latest image, after restarting the render if the view moved or was resized; while a
