@@ -49,15 +49,13 @@ def _check_image(name: str, image, shape=None) -> np.ndarray:
 
 
 def _box_mean(image: np.ndarray, size: int) -> np.ndarray:
-    """Mean over a size × size square around each pixel (edges repeated)."""
+    """Mean over a size × size square around each pixel (edges repeated), by shifted sums (no running
+    sums: their rounding next to huge values would turn a zero neighbourhood's mean negative)."""
     pad = size // 2
     padded = np.pad(image, pad, mode="edge")
-    sums = np.cumsum(np.cumsum(padded, axis=0), axis=1)
-    sums = np.pad(sums, ((1, 0), (1, 0)))
     height, width = image.shape
-    total = (sums[size:size + height, size:size + width] - sums[:height, size:size + width]
-             - sums[size:size + height, :width] + sums[:height, :width])
-    return total / (size * size)
+    rows = sum(padded[dy:dy + height] for dy in range(size))
+    return sum(rows[:, dx:dx + width] for dx in range(size)) / (size * size)
 
 
 def noisy_weight(rgb: np.ndarray, variance: np.ndarray) -> np.ndarray:

@@ -52,6 +52,18 @@ def test_the_noisy_weight_follows_the_relative_error():
     assert np.all(weight[:, :3] == 1.0) and np.all(weight[:, 9:] == 0.0)
 
 
+def test_a_huge_variance_beside_zero_gives_no_nan():
+    """A huge variance's rounding must not leak into a zero neighbourhood: summed areas made its mean
+    negative (its square root NaN) on the Rayleigh demo."""
+    rng = np.random.default_rng(3)
+    variance = np.zeros((64, 64, 3))
+    variance[:, :20] = 10.0 ** rng.uniform(-3, 9, (64, 20, 3))
+    rgb = np.full((64, 64, 3), 0.3)
+    weight = denoise.noisy_weight(rgb, variance)
+    assert np.isfinite(weight).all() and np.all(weight[:, 30:] == 1.0)
+    assert np.isfinite(denoise.denoise(rgb, variance)).all()
+
+
 @pytest.mark.parametrize("rgb, variance, quality, message", [
     (np.ones((4, 4)), None, "high", "height × width × 3"),
     (np.full((4, 4, 3), np.nan), None, "high", "non-finite"),
