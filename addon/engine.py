@@ -8,9 +8,9 @@ is honoured. The Render Result's Combined pass (linear Rec.709) is updated as of
 at the end the XYZ and XYZ Variance passes, which the compositor and multilayer EXR output see, are
 written too, and with Denoise on, Combined is replaced by the denoised image (addon/tracer/denoise.py;
 the updates during the render stay raw). While the kernel compiles (the first render), the stats line
-says so. Bad input is reported as an error and renders nothing, so Blender writes no output file. With the Cycles emulation
-chosen as renderer, F12 reports an error instead: Cycles cannot render from inside another engine's
-render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
+says so. Bad input is reported as an error and renders nothing, so Blender writes no output file. With
+the Cycles emulation chosen as renderer, F12 reports an error instead: Cycles cannot render from inside
+another engine's render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
 CLI), a render exports its depsgraph for it and renders nothing. A preview renders Blender's preview
 scene as a render does, lit as `preview_scene` says, and reports nothing.
 
@@ -23,8 +23,8 @@ viewport's Material Preview uses EEVEE.
 
 The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera
 (built from the 3D view's matrices, `region_camera`) at the Viewport Samples (denoised with Viewport
-Denoise on) and hands it to the engine's `ViewportRenderer` (addon/viewport_render.py), which restarts its background render; `view_draw`
-restarts it when the view moved or was resized, draws the latest image through the scene's colour
+Denoise on) and hands it to the engine's `ViewportRenderer` (addon/viewport_render.py), which restarts
+its background render; `view_draw` restarts it when the view moved or was resized, draws the latest image through the scene's colour
 management (`bind_display_space_shader`, addon/viewport_draw.py) and, while a render is in flight, asks
 for the next redraw (`tag_redraw`, as Blender's own engine template does; no timers). Bad input stops
 the render and its message shows in the viewport's stats line.
