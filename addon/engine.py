@@ -21,13 +21,13 @@ custom properties. Those for what it does not render are left out (`NOT_RENDERED
 dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The
 viewport's Material Preview uses EEVEE.
 
-The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera
-(built from the 3D view's matrices, `region_camera`) at the Viewport Samples (denoised with Viewport
-Denoise on) and hands it to the engine's `ViewportRenderer` (addon/viewport_render.py), which restarts
-its background render; `view_draw` restarts it when the view moved or was resized, draws the latest image through the scene's colour
-management (`bind_display_space_shader`, addon/viewport_draw.py) and, while a render is in flight, asks
-for the next redraw (`tag_redraw`, as Blender's own engine template does; no timers). Bad input stops
-the render and its message shows in the viewport's stats line.
+The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera (built
+from the 3D view's matrices, `region_camera`) at the Viewport Samples (denoised with Viewport Denoise on)
+and hands it to the engine's `ViewportRenderer` (addon/viewport_render.py), which restarts its background
+render; `view_draw` restarts it when the view moved or was resized, draws the latest image through the
+scene's colour management (`bind_display_space_shader`, addon/viewport_draw.py) and, while a render is in
+flight, asks for the next redraw (`tag_redraw`, as Blender's own engine template does; no timers). Bad input
+stops the render and its message shows in the viewport's stats line.
 """
 
 import dataclasses

@@ -2,15 +2,16 @@
 one background thread.
 
 `ViewportRenderer.render(scene)` hands over a finished tracer Scene (exported on the main thread, with the
-view's camera and the Viewport Samples): the render in flight stops at its next unit of work and the
-new one starts. Each render goes through the resolution steps of `schedule` (1/8, 1/4 and 1/2 of the
-view's pixels per axis, one sample each) and then renders the full view up to the scene's sample count,
-whose passes refine the image (its first pass fills in the half-resolution image as it goes). `frame`
-is the latest image, at the view's size (low resolutions scaled up by nearest neighbour), for the draw
-step to pick up on the main thread. With Viewport Denoise on, the full view's images are denoised (OIDN's
-fast quality, addon/tracer/denoise.py) once every pixel has a sample; the low-resolution steps stay raw. One thread renders every request in turn, so two kernels never run
-at once and a burst of edits renders only the last one. The thread never touches `bpy`; renders go
-through `dispatch` (this computer or the Dask farm), like F12's.
+view's camera and the Viewport Samples): the render in flight stops at its next unit of work and the new
+one starts. Each render goes through the resolution steps of `schedule` (1/8, 1/4 and 1/2 of the view's
+pixels per axis, one sample each) and then renders the full view up to the scene's sample count, whose
+passes refine the image (its first pass fills in the half-resolution image as it goes). `frame` is the
+latest image, at the view's size (low resolutions scaled up by nearest neighbour), for the draw step to
+pick up on the main thread. With Viewport Denoise on, the full view's images are denoised (OIDN's fast
+quality, addon/tracer/denoise.py) once every pixel has a sample; the low-resolution steps stay raw. One
+thread renders every request in turn, so two kernels never run at once and a burst of edits renders only
+the last one. The thread never touches `bpy`; renders go through `dispatch` (this computer or the Dask
+farm), like F12's.
 """
 
 import dataclasses
