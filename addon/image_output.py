@@ -38,7 +38,7 @@ def denoising(settings) -> tuple[bool, str]:
         return False, ""
     if denoise.available():
         return True, ""
-    return False, f"Denoise skipped: {denoise.UNAVAILABLE}"
+    return False, f"Denoise skipped: {denoise.unavailable_reason()}"
 
 
 def passes(film, region: Region | None = None, denoised: bool = False) -> Passes:

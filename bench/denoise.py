@@ -10,6 +10,8 @@ Printed: RMSE of the linear Rec.709 image against the reference for noisy, denoi
 and the ratio equal-time RMSE ÷ denoised RMSE (above 1: denoising wins at equal time). Then the
 denoiser's own time at 256×160, 512×512 (the viewport's "fast" quality too) and 1920×1080.
 Nothing is asserted. RMSE against a reference of finite samples includes the reference's own noise.
+With `--png DIR`, each scene's images at the smallest N are written side by side as DIR/<scene>.png:
+noisy, denoised, equal-time noisy, reference (Standard view).
 
     python -m bench.denoise                       # 256×160, N = 4 16 64, reference 1024 spp
     python -m bench.denoise --quick               # 128×80, N = 4 16, reference 256 spp
@@ -17,9 +19,11 @@ Nothing is asserted. RMSE against a reference of finite samples includes the ref
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 
+from addon.tracer import image_io
 from addon.tracer.denoise import denoise, denoised_rgb
 from addon.tracer.render import render
 from bench.measure import machine
@@ -42,6 +46,8 @@ def parse(argv=None):
     parser.add_argument("--height", type=int, default=160)
     parser.add_argument("--spp", type=int, nargs="+", default=[4, 16, 64])
     parser.add_argument("--reference-spp", type=int, default=1024)
+    parser.add_argument("--png", type=Path, help="folder for side-by-side images (noisy, denoised, equal time, "
+                        "reference) at the smallest N")
     args = parser.parse_args(argv)
     if args.quick:
         args.width, args.height, args.spp, args.reference_spp = 128, 80, [4, 16], 256
@@ -71,6 +77,9 @@ def compare(name: str, spec: CloudSpec, args) -> None:
         print(f"{name:16} {spp:5d} {render_seconds:8.2f} {denoise_seconds:8.3f} {noisy_error:10.5f} "
               f"{denoised_error:10.5f} {equal_spp:5d} ({equal_seconds:6.2f} s) {equal_error:10.5f} "
               f"{equal_error / denoised_error:8.2f}×", flush=True)
+        if args.png is not None and spp == min(args.spp):
+            strip = np.concatenate([film.rgb(), denoised, equal, reference], axis=1)
+            image_io.write_png(args.png / f"{name.replace(' ', '_')}.png", strip)
 
 
 def denoiser_times() -> None:

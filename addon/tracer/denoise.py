@@ -2,9 +2,9 @@
 
 A display and output step: it takes the linear Rec.709 image (`Film.rgb()`, HDR) and returns a denoised
 copy; the film's XYZ and variance passes are never changed. OIDN takes no variance, so the variance is
-used beside it: where the film's estimate is already precise (relative standard error of the luminance,
-averaged over a small neighbourhood, below `PRECISE_ERROR`) the noisy pixel is kept, and the denoised one
-blends in as the error grows, so converged detail is not smoothed. The per-pixel variance means nothing
+used beside it: the more precise the film's estimate (relative standard error of the luminance, averaged
+over a small neighbourhood), the more of the rendered pixel is kept: all of it at no error, none from
+`PRECISE_ERROR` on, so converged detail is not smoothed. The per-pixel variance means nothing
 below `MIN_VARIANCE_SAMPLES` samples (a pixel whose few samples all missed the smoke reads as exact), so
 `denoised_rgb` uses it only from there on. No albedo or normal feature passes: the kernel does not make
 them. Negative RGB (colours outside Rec.709) is clipped to 0 for OIDN's HDR filter.
@@ -20,21 +20,30 @@ NEIGHBOURHOOD = 5  # side of the square over which each pixel's relative error i
 QUALITIES = ("high", "balanced", "fast")  # OIDN's: final renders, interactive, fastest
 
 
-def _load():
-    """The `pyoidn` module, or the reason it cannot be used here."""
-    try:
-        import pyoidn
-    except (ImportError, OSError) as problem:  # OSError: the bundled library cannot load on this machine
-        return None, f"Open Image Denoise is not available on this platform ({problem})"
-    return pyoidn, ""
+_loaded = None  # (the `pyoidn` module or None, why not) once `_load` has run: importing it takes 0.1–0.2 s
 
 
-_pyoidn, UNAVAILABLE = _load()
+def _load() -> tuple:
+    """The `pyoidn` module and "", or None and the reason it cannot be used here (imported on first use)."""
+    global _loaded
+    if _loaded is None:
+        try:
+            import pyoidn
+        except (ImportError, OSError) as problem:  # OSError: the bundled library cannot load on this machine
+            _loaded = None, f"Open Image Denoise is not available on this platform ({problem})"
+        else:
+            _loaded = pyoidn, ""
+    return _loaded
 
 
 def available() -> bool:
     """Whether this machine can denoise (the `pyoidn` package and its OIDN library load)."""
-    return _pyoidn is not None
+    return _load()[0] is not None
+
+
+def unavailable_reason() -> str:
+    """Why this machine cannot denoise ("" when it can)."""
+    return _load()[1]
 
 
 def _check_image(name: str, image, shape=None) -> np.ndarray:
@@ -76,11 +85,12 @@ def denoise(rgb, variance=None, quality: str = "high") -> np.ndarray:
         raise SpectralError(f"denoise quality {quality!r} is not one of {', '.join(QUALITIES)}")
     if variance is not None:
         variance = _check_image("variance", variance, rgb.shape)
-    if _pyoidn is None:
-        raise SpectralError(UNAVAILABLE)
+    pyoidn, reason = _load()
+    if pyoidn is None:
+        raise SpectralError(reason)
     colour = np.ascontiguousarray(np.maximum(rgb, 0.0), dtype=np.float32)
     try:
-        denoised = _pyoidn.denoise(colour, hdr=True, quality=quality)
+        denoised = pyoidn.denoise(colour, hdr=True, quality=quality)
     except (RuntimeError, ValueError, TypeError) as problem:
         raise SpectralError(f"Open Image Denoise failed: {problem}") from problem
     if variance is None:

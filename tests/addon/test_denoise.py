@@ -18,6 +18,7 @@ from tests.addon.recording import draw
 bpy = pytest.importorskip("bpy")
 
 ROOT = Path(__file__).resolve().parents[2]
+NOT_HERE = "Open Image Denoise is not available on this platform (test)"
 pytestmark = pytest.mark.slow  # the first render of a process compiles the kernel
 
 
@@ -67,7 +68,7 @@ def test_render_to_image_denoises_its_image_not_the_exr_passes(registered, tmp_p
 
 
 def test_without_oidn_f12_warns_and_writes_the_raw_image(registered, tmp_path, monkeypatch):
-    monkeypatch.setattr(denoise, "_pyoidn", None)
+    monkeypatch.setattr(denoise, "_loaded", (None, NOT_HERE))
     scene = denoised_scene(tmp_path)
     scene.render.engine = "SPECTRAL_VOLUME"
     scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
@@ -98,7 +99,7 @@ def test_the_cli_denoises_its_png_and_combined(registered, tmp_path):
 @pytest.mark.parametrize("loads", [True, False])
 def test_the_render_panel_shows_denoise_greyed_where_oidn_cannot_load(registered, monkeypatch, loads):
     if not loads:
-        monkeypatch.setattr(denoise, "_pyoidn", None)
+        monkeypatch.setattr(denoise, "_loaded", (None, NOT_HERE))
     scene = bpy.context.scene
     scene.render.engine = "SPECTRAL_VOLUME"
     layout = draw(bpy.types.SPECTRAL_PT_render, SimpleNamespace(scene=scene, engine=scene.render.engine))

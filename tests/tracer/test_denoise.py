@@ -76,8 +76,7 @@ def test_bad_input_is_refused_with_a_clear_error(rgb, variance, quality, message
 
 
 def test_without_oidn_it_says_so(monkeypatch):
-    monkeypatch.setattr(denoise, "_pyoidn", None)
-    monkeypatch.setattr(denoise, "UNAVAILABLE", "Open Image Denoise is not available on this platform (test)")
+    monkeypatch.setattr(denoise, "_loaded", (None, "Open Image Denoise is not available on this platform (test)"))
     assert not denoise.available()
     with pytest.raises(SpectralError, match="not available on this platform"):
         denoise.denoise(np.ones((4, 4, 3)))
