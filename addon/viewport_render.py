@@ -32,7 +32,7 @@ RESOLUTION_DIVISORS = (8, 4, 2)  # the quick low-resolution steps before the ful
 UNIT_SECONDS = 0.05  # the render's units of work: a change stops the render in flight within about this
 REFRESH_SECONDS = 0.1  # the full view's image is converted for display at most this often…
 REFRESH_COST_RATIO = 10  # …and less often when converting takes over 1/ratio of the time between
-DENOISE_QUALITY = "fast"  # OIDN's quality for the viewport: 0.17 s at 512×512 on 2 cores, half of "high"'s
+DENOISE_QUALITY = "fast"  # OIDN's quality for the viewport: 0.17–0.19 s at 512×512 (2 cores), half "high"'s
 
 
 @dataclass(frozen=True)
