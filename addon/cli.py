@@ -154,9 +154,10 @@ def _render_frame(scene, frame: int, args) -> str:
         scheduler = settings.scheduler_address if args.scheduler is None else args.scheduler
         bar = None if args.quiet else ProgressBar()
         result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=bar, notice=bar and bar.notice)
-    for warning in warnings:
+    denoised, skipped = image_output.denoising(settings)
+    for warning in warnings + ([skipped] if skipped else []):
         print(f"warning: {warning}", file=sys.stderr)
-    images = image_output.passes(result.film, region)
+    images = image_output.passes(result.film, region, denoised)
     outputs = [image_output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
     if args.png is not None:
         outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure))

@@ -6,10 +6,11 @@ settings' scheduler address, in passes of doubling sample counts cut into units 
 a second. After every unit, progress (by samples) and the time left are reported and Esc (`test_break`)
 is honoured. The Render Result's Combined pass (linear Rec.709) is updated as often as that stays cheap;
 at the end the XYZ and XYZ Variance passes, which the compositor and multilayer EXR output see, are
-written too. While the kernel compiles (the first render), the stats line says so. Bad input is
-reported as an error and renders nothing, so Blender writes no output file. With the Cycles emulation
-chosen as renderer, F12 reports an error instead: Cycles cannot render from inside another engine's
-render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
+written too, and with Denoise on, Combined is replaced by the denoised image (addon/tracer/denoise.py;
+the updates during the render stay raw). While the kernel compiles (the first render), the stats line
+says so. Bad input is reported as an error and renders nothing, so Blender writes no output file. With
+the Cycles emulation chosen as renderer, F12 reports an error instead: Cycles cannot render from inside
+another engine's render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
 CLI), a render exports its depsgraph for it and renders nothing. A preview renders Blender's preview
 scene as a render does, lit as `preview_scene` says, and reports nothing.
 
@@ -20,13 +21,13 @@ custom properties. Those for what it does not render are left out (`NOT_RENDERED
 dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The
 viewport's Material Preview uses EEVEE, with each spectral material's preview nodes (`material_preview`).
 
-The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera
-(built from the 3D view's matrices, `region_camera`) at the Viewport Samples and hands it to the engine's
-`ViewportRenderer` (addon/viewport_render.py), which restarts its background render; `view_draw`
-restarts it when the view moved or was resized, draws the latest image through the scene's colour
-management (`bind_display_space_shader`, addon/viewport_draw.py) and, while a render is in flight, asks
-for the next redraw (`tag_redraw`, as Blender's own engine template does; no timers). Bad input stops
-the render and its message shows in the viewport's stats line.
+The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera (built
+from the 3D view's matrices, `region_camera`) at the Viewport Samples (denoised with Viewport Denoise on)
+and hands it to the engine's `ViewportRenderer` (addon/viewport_render.py), which restarts its background
+render; `view_draw` restarts it when the view moved or was resized, draws the latest image through the
+scene's colour management (`bind_display_space_shader`, addon/viewport_draw.py) and, while a render is in
+flight, asks for the next redraw (`tag_redraw`, as Blender's own engine template does; no timers). Bad input
+stops the render and its message shows in the viewport's stats line.
 """
 
 import dataclasses
@@ -36,9 +37,11 @@ import gpu
 
 from . import dispatch, render_export
 from .export.scene import export_scene
+from .image_output import denoising
 from .pixels import blender_rows, with_alpha
 from .preview import preview_scene
 from .props.render import ENGINE_ID
+from .tracer.denoise import available as denoise_available, denoised_rgb
 from .tracer.errors import SpectralError
 from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
 from .tracer.progress import Throttle, TimeLeft
@@ -96,6 +99,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             rendered = dispatch.run(scene, settings.scheduler_address, progress=progress, cancel=self.test_break,
                                     notice=self._show_stats)
             self._write(result, rendered.film)
+            self._denoise(result, rendered.film, settings)
         except SpectralError as problem:
             self._report_unless_preview({"ERROR"}, str(problem))
         self.end_result(result)
@@ -121,7 +125,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
         self.viewport_notes = export.warnings + (emulation if settings.renderer == "CYCLES" else [])
         scene = export.scene
         scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spp=settings.preview_samples))
-        viewport.render(scene, settings.scheduler_address)
+        viewport.render(scene, settings.scheduler_address, settings.viewport_denoise and denoise_available())
 
     def view_draw(self, context, depsgraph):
         """Draw the latest image, after restarting the render if the view moved or was resized; while a
@@ -155,6 +159,18 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
 
     def _show_stats(self, text: str) -> None:
         self.update_stats("", f"Spectral Volume | {text}")
+
+    def _denoise(self, result, film, settings) -> None:
+        """With Denoise on (not in previews), rewrite Combined with the denoised image (the XYZ and XYZ
+        Variance passes stay as rendered). Runs after the raw result is written, so a failure loses nothing."""
+        denoised, skipped = denoising(settings)
+        if skipped:
+            self._report_unless_preview({"WARNING"}, skipped)
+        if not denoised or self.is_preview or self.test_break():
+            return
+        self._show_stats("Denoising")
+        result.layers[0].passes[COMBINED].rect.foreach_set(blender_rows(with_alpha(denoised_rgb(film))).ravel())
+        self.update_result(result)
 
     def _write(self, result, film, preview: bool = False) -> None:
         """Film → Render Result: Combined, and unless this is a preview the XYZ and XYZ Variance passes

@@ -9,7 +9,8 @@ import numpy as np
 
 from .export.camera import Region, render_region
 from .pixels import blender_rows, with_alpha
-from .tracer import image_io
+from .tracer import denoise, image_io
+from .tracer.denoise import denoised_rgb
 
 COLORSPACE = "Linear Rec.709"
 
@@ -30,9 +31,21 @@ def placement(scene) -> Region | None:
     return None if scene.render.use_crop_to_border else render_region(scene)
 
 
-def passes(film, region: Region | None = None) -> Passes:
-    """The film's passes, placed at `region` in a frame of zeros when one is given."""
-    rendered = Passes(film.xyz, film.rgb(), film.variance, np.ones((film.height, film.width)))
+def denoising(settings) -> tuple[bool, str]:
+    """Whether the final image is denoised (the Render settings' Denoise, where Open Image Denoise loads),
+    and a warning for the user when Denoise is on but cannot run here ("" otherwise)."""
+    if not settings.denoise:
+        return False, ""
+    if denoise.available():
+        return True, ""
+    return False, f"Denoise skipped: {denoise.unavailable_reason()}"
+
+
+def passes(film, region: Region | None = None, denoised: bool = False) -> Passes:
+    """The film's passes, placed at `region` in a frame of zeros when one is given; with `denoised`, the RGB
+    (Combined) image is denoised (addon/tracer/denoise.py) while XYZ and variance stay as rendered."""
+    rgb = denoised_rgb(film) if denoised else film.rgb()
+    rendered = Passes(film.xyz, rgb, film.variance, np.ones((film.height, film.width)))
     if region is None:
         return rendered
     top = region.full_height - region.y - region.height  # Region counts rows from the bottom
@@ -66,10 +79,10 @@ def store_image(name: str, rgb, alpha=None):
 
 
 def write_outputs(film, image_name: str, exr_path: str = "", layer: str = image_io.VIEW_LAYER,
-                  region: Region | None = None):
+                  region: Region | None = None, denoised: bool = False):
     """The EXR (see `exr`) first, written to a temporary name and renamed, so a failure leaves the old file;
-    then the image. `region`: see `placement`. Returns the image."""
-    images = passes(film, region)
+    then the image. `region`: see `placement`; `denoised`: see `passes`. Returns the image."""
+    images = passes(film, region, denoised)
     if exr_path:
         image_io.write_all([exr(bpy.path.abspath(exr_path), images, layer)])
     return store_image(image_name, images.rgb, images.alpha)

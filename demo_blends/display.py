@@ -2,53 +2,19 @@
 
 Only pictures are made here; every figure the demos print is computed from the raw film (`metrics`),
 and the EXR keeps the raw film with its variance. Volumes at a few dozen samples per pixel are
-grainy, so the display image is filtered with non-local means guided by the film's own variance
-(Rousselle, Knaus & Zwicker 2012, "Adaptive rendering with non-local means filtering"): two pixels are
-averaged when their patches differ by no more than their noise explains. Isolated fireflies are
-first pulled down to their neighbourhood (display only).
+grainy, so the display image goes through the add-on's denoiser (Intel Open Image Denoise, guided by
+the film's variance: addon/tracer/denoise.py), as F12 with Denoise on does.
 """
 
 import numpy as np
-from scipy.ndimage import median_filter, uniform_filter
 
-from addon.tracer import colorimetry, image_io
-
-
-def _tame_fireflies(xyz: np.ndarray, factor: float = 6.0) -> np.ndarray:
-    """Scale down pixels whose Y exceeds `factor` × the median of their 5×5 neighbourhood (hue kept)."""
-    luminance = xyz[..., 1]
-    limit = factor * median_filter(luminance, size=5, mode="nearest") + 1e-6
-    scale = np.where(luminance > limit, limit / np.maximum(luminance, 1e-12), 1.0)
-    return xyz * scale[..., None]
-
-
-def denoise(xyz: np.ndarray, variance: np.ndarray, radius: int = 5, patch: int = 2, k: float = 0.6) -> np.ndarray:
-    """Non-local means on XYZ with the per-pixel variance of the estimate setting what counts as noise."""
-    xyz = _tame_fireflies(xyz)
-    height, width = xyz.shape[:2]
-    pad = radius + patch
-    u = np.pad(xyz, ((pad, pad), (pad, pad), (0, 0)), mode="reflect")
-    v = np.pad(variance, ((pad, pad), (pad, pad), (0, 0)), mode="reflect")
-    inner = (slice(radius, radius + height + 2 * patch), slice(radius, radius + width + 2 * patch))
-    up, vp = u[inner], v[inner]
-    total, weights = np.zeros_like(xyz), np.zeros((height, width, 1))
-    crop = (slice(patch, patch + height), slice(patch, patch + width))
-    for dy in range(-radius, radius + 1):
-        for dx in range(-radius, radius + 1):
-            shifted = (slice(radius + dy, radius + dy + height + 2 * patch),
-                       slice(radius + dx, radius + dx + width + 2 * patch))
-            uq, vq = u[shifted], v[shifted]
-            distance = ((up - uq) ** 2 - (vp + np.minimum(vp, vq))) / (1e-10 + k * k * (vp + vq))
-            distance = uniform_filter(distance.mean(axis=2), size=2 * patch + 1)[crop]
-            weight = np.exp(-np.maximum(distance, 0.0))[..., None]
-            total += weight * uq[crop]
-            weights += weight
-    return total / weights
+from addon.tracer import colorimetry, denoise, image_io
 
 
 def display_rgb(xyz: np.ndarray, variance: np.ndarray | None = None) -> np.ndarray:
-    """Linear Rec.709 of the (denoised, when `variance` is given) film."""
-    return colorimetry.xyz_to_rgb(xyz if variance is None else denoise(xyz, variance))
+    """Linear Rec.709 of the film; denoised when its `variance` (of the XYZ estimate) is given."""
+    rgb = colorimetry.xyz_to_rgb(xyz)
+    return rgb if variance is None else denoise.denoise(rgb, variance)
 
 
 # ----------------------------------------------------------------------------- contact sheet

@@ -6,7 +6,7 @@ missing are built first). It is opened in Blender-as-a-module, exported by the a
 and rendered by the add-on's dispatcher. Written into the output folder:
 - `<name>.exr`: the raw film, multilayer (passes Combined: linear Rec.709, XYZ and XYZ Variance, named as F12's:
   `ViewLayer.XYZ.X`, ...);
-- `<name>.png`: the display image, denoised (`display`), Standard view at the scene's exposure;
+- `<name>.png`: the display image, denoised with Open Image Denoise (`display`), Standard view at the scene's exposure;
 - `contact_sheet.png` (all demos, captioned) with `contact_sheet.txt` (the captions as text);
 - `figures.json`: every printed figure, for scripts and tests.
 Every figure is computed from the raw film and the exported scene (`metrics`), never from the

@@ -10,7 +10,7 @@ failed one leaves the image and the file as they were.
 import bpy
 
 from ..cycles_emulation.job import EmulationJob, emulation_job
-from ..image_output import placement, write_outputs
+from ..image_output import denoising, placement, write_outputs
 from ..render_export import export_rendered
 from ..render_job import RenderJob
 from ..tracer.errors import SpectralError
@@ -73,9 +73,12 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         if not job.succeeded:
             self.report({"WARNING"}, "Render cancelled, nothing written")
             return {"CANCELLED"}
+        denoised, skipped = denoising(context.scene.spectral)
+        if skipped:
+            self.report({"WARNING"}, skipped)
         try:
             image = write_outputs(job.result.film, self.image_name, self.exr_path, context.view_layer.name,
-                                  self._region)
+                                  self._region, denoised)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Render not saved: {problem}")
             return {"CANCELLED"}

@@ -17,6 +17,14 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
     preview_samples: bpy.props.IntProperty(
         name="Viewport Samples", default=32, min=1, soft_max=4096,
         description="Paths per pixel of the Rendered viewport: it refines its image up to this many, then stops")
+    denoise: bpy.props.BoolProperty(
+        name="Denoise", default=False,
+        description="Denoise the final image (F12, Render to Image, command line) with Intel Open Image Denoise: "
+                    "the Combined pass and PNGs only; the XYZ and XYZ Variance passes stay as rendered")
+    viewport_denoise: bpy.props.BoolProperty(
+        name="Viewport Denoise", default=False,
+        description="Denoise the Rendered viewport's image with Intel Open Image Denoise once it shows the full "
+                    "resolution")
     seed: bpy.props.IntProperty(name="Seed", description="Random seed: the same seed gives the same image",
                                 default=DEFAULTS.seed, min=0)
     max_bounces: bpy.props.IntProperty(name="Max Bounces", description="Most scattering events along a path",

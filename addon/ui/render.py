@@ -4,6 +4,7 @@ import bpy
 
 from ..export.fluids import fluid_domain
 from ..operators.emulation import ESTIMATES
+from ..tracer import denoise
 from .panel import SpectralPanel
 
 
@@ -15,8 +16,18 @@ def draw_render_main(layout, scene) -> None:
     column.prop(settings, "preview_samples", text="Viewport")
     layout.prop(settings, "max_bounces")
     layout.prop(settings, "seed")
+    draw_denoise(layout, settings)
     if settings.renderer == "CYCLES":
         draw_emulation(layout.box(), scene)
+
+
+def draw_denoise(layout, settings) -> None:
+    """The Denoise options, greyed out where Open Image Denoise cannot load."""
+    heading = "Denoise" if denoise.available() else "Denoise (Open Image Denoise not available on this platform)"
+    column = layout.column(align=True, heading=heading)
+    column.enabled = denoise.available()
+    column.prop(settings, "denoise", text="Render")
+    column.prop(settings, "viewport_denoise", text="Viewport")
 
 
 def draw_emulation(layout, scene) -> None:

@@ -195,6 +195,21 @@ def test_a_moved_view_restarts_and_the_same_view_does_not():
     viewport.close()
 
 
+def test_viewport_denoise_denoises_the_full_view():
+    """With Viewport Denoise, the full view's image is the denoised film; a moved view keeps denoising."""
+    box = scenes.medium(scenes.box_grid(size=(1.6, 1.6, 1.6), density=2.0), albedo=0.9)
+    scene = scenes.scene(scenes.perspective_camera(48, 36), [box], [scenes.sun((1.0, 0.5, 1.0), strength=3.0)],
+                         spp=4)
+    viewport = ViewportRenderer()
+    viewport.render(scene, "", denoised=True)
+    assert viewport.wait(120) and viewport.frame.samples == 4, viewport.status
+    film = render(scene).film  # same scene and seed: the same film
+    np.testing.assert_allclose(viewport.frame.pixels, view_pixels(film, 48, 36, denoised=True), rtol=1e-5, atol=1e-6)
+    assert not np.allclose(viewport.frame.pixels, view_pixels(film, 48, 36), rtol=1e-3, atol=1e-4)
+    assert viewport.look_through(dataclasses.replace(scene.camera, width=24, height=18)) and viewport.denoised
+    viewport.close()
+
+
 def test_failures_are_shown_not_raised():
     viewport = ViewportRenderer(StandInRun(error=SpectralError("grid 'density' in smoke.vdb is empty")))
     viewport.render(_tracer_scene(), "")
@@ -356,6 +371,7 @@ def test_add_on_setting_edits_reach_the_viewport(registered, tmp_path):
     context = _camera_view(scene.camera, 16, 12)
     bpy.context.evaluated_depsgraph_get()
     scene.spectral.seed, scene.spectral.preview_samples, scene.world.spectral.strength = 7, 3, 2.5
+    scene.spectral.viewport_denoise = True
     cloud.material_slots[0].material.spectral.density_scale = 12.0
     bpy.data.lights["Sun"].spectral.unit = "radiant"
     exported = export_scene(bpy.context.evaluated_depsgraph_get(), view=region_camera(context)).scene
@@ -366,6 +382,7 @@ def test_add_on_setting_edits_reach_the_viewport(registered, tmp_path):
     engine = EngineStandIn()
     engine.view_update(context, bpy.context.evaluated_depsgraph_get())
     assert engine.viewport.scene.settings.spp == 3 and engine.viewport.scene.settings.seed == 7
+    assert engine.viewport.denoised
     engine.viewport.close()
 
 
