@@ -21,12 +21,13 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   with phase sampling by MIS for environment and finite suns.
 - Thermal emission σ_a·Planck(T) is collected at every tentative collision.
 
-Structure: `render_tile` runs pixels in parallel; `_render_pixel` runs a pixel's samples, each through
+Structure: `render_tile` runs runs of pixels in parallel; `_render_pixels` makes a run's buffers once
+(each allocation updates Numba's global counters atomically) and `_render_samples` runs a pixel's samples, each through
 the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `_camera_ray`, then transport
 (`_trace`: `_transport` with `_free_flight`, `_offer_fluorescence`, `_escape`, `_next_event`, `_sample_phase`,
 `_survives_roulette`; then `_start_fluorescent_branch` for each fluorescent sub-path),
 then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`). Every
-function below `_render_pixel` is inlined into it, and the kernel scene's arrays are borrowed
+function below `_render_samples` is inlined into it, and the kernel scene's arrays are borrowed
 (`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
 reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call.
 """
@@ -905,18 +906,31 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, 
 
 
 @jit
-def _render_pixel(ks, px, py, pixel, sample_begin, sample_end, seed, band):
-    """Samples [sample_begin, sample_end) of one pixel: (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z²)."""
+def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+    """Samples [sample_begin, sample_end) of the tile's pixels [first, last) (row-major), added to `sum_xyz`
+    and `sum_sq`. The path's buffers are made once for them all: each allocation updates Numba's global
+    allocation counters atomically, which threads contend for."""
     media = max(ks.density_scale.shape[0], 1)
-    return _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, _new_path(media),
-                           _new_coefficients(media), _new_coefficients(media), _new_light_sample(), _new_tracker(media),
-                           _new_fluorescent())
+    path, vertex, shadow = _new_path(media), _new_coefficients(media), _new_coefficients(media)
+    light, tracker, fl = _new_light_sample(), _new_tracker(media), _new_fluorescent()
+    for index in range(first, last):
+        row, column = index // tile_width, index % tile_width
+        px, py = x0 + column, y0 + row
+        sx, sy, sz, qx, qy, qz = _render_samples(ks, px, py, py * ks.width + px, sample_begin, sample_end, seed, band,
+                                                 path, vertex, shadow, light, tracker, fl)
+        sum_xyz[row, column, 0] += sx
+        sum_xyz[row, column, 1] += sy
+        sum_xyz[row, column, 2] += sz
+        sum_sq[row, column, 0] += qx
+        sum_sq[row, column, 1] += qy
+        sum_sq[row, column, 2] += qz
 
 
 @jit
 def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, shadow, light, tracker,
                     fl):
-    """`_render_pixel` with the path's buffers made. The scene and the buffers, which the caller keeps
+    """Samples [sample_begin, sample_end) of one pixel, (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z²), in the path's
+    buffers (`_render_pixels` makes them). The scene and the buffers, which the caller keeps
     alive, are borrowed (`_borrowed`): the loop below then updates no reference counts."""
     ks, path, vertex, shadow, light, tracker, fl = (_borrowed(ks), _borrowed(path), _borrowed(vertex),
                                                     _borrowed(shadow), _borrowed(light), _borrowed(tracker),
@@ -937,21 +951,21 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
     return sx, sy, sz, qx, qy, qz
 
 
+# A tile's pixels are shared among the threads in this many runs of neighbouring pixels, each with its own
+# buffers (several runs per thread for up to 16 threads).
+PIXEL_CHUNKS = 64
+
+
 @cached
 @jit(parallel=True, nogil=True)
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
-    for index in prange(tile_width * tile_height):
-        row, column = index // tile_width, index % tile_width
-        px, py = x0 + column, y0 + row
-        sx, sy, sz, qx, qy, qz = _render_pixel(ks, px, py, py * ks.width + px, sample_begin, sample_end, seed, band)
-        sum_xyz[row, column, 0] += sx
-        sum_xyz[row, column, 1] += sy
-        sum_xyz[row, column, 2] += sz
-        sum_sq[row, column, 0] += qx
-        sum_sq[row, column, 1] += qy
-        sum_sq[row, column, 2] += qz
+    pixels = tile_width * tile_height
+    chunks = min(pixels, PIXEL_CHUNKS)
+    for chunk in prange(chunks):
+        _render_pixels(ks, x0, y0, tile_width, chunk * pixels // chunks, (chunk + 1) * pixels // chunks, sample_begin,
+                       sample_end, seed, band, sum_xyz, sum_sq)
 
 
 def set_threads(count: int) -> None:
