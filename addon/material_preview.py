@@ -94,15 +94,20 @@ def sync(material) -> bool:
     return changed
 
 
+_engines_seen: dict = {}  # scene name → the render engine `sync_updated` last saw it use
+
+
 @bpy.app.handlers.persistent
 def sync_updated(scene, depsgraph) -> None:
-    """After a change, while this engine renders the scene: sync the materials that changed (all of them
-    when the scene itself changed, e.g. its render engine)."""
+    """After a change, while this engine renders the scene: sync the materials that changed, or all of
+    them when the scene has just switched to this engine (not on every other scene update: moving an
+    object updates the scene too, and a large file has many materials)."""
+    switched = _engines_seen.get(scene.name) != scene.render.engine
+    _engines_seen[scene.name] = scene.render.engine
     if scene.render.engine != ENGINE_ID:
         return
-    scene_changed = any(isinstance(update.id, bpy.types.Scene) for update in depsgraph.updates)
     changed = {update.id.original for update in depsgraph.updates if isinstance(update.id, bpy.types.Material)}
-    for material in bpy.data.materials if scene_changed else changed:
+    for material in bpy.data.materials if switched else changed:
         if material.library is None:
             sync(material)
 

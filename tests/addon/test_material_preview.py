@@ -67,3 +67,14 @@ def test_edits_reach_the_preview_through_the_depsgraph_handler(registered):
     bpy.context.view_layer.update()  # runs the depsgraph_update_post handlers
     principled = material.node_tree.nodes[PRINCIPLED]
     np.testing.assert_allclose(principled.inputs["Density"].default_value, 7.0, rtol=1e-6)
+
+
+def test_switching_to_the_engine_syncs_every_spectral_material(registered):
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    material = spectral_material()
+    bpy.context.view_layer.update()
+    assert PRINCIPLED not in material.node_tree.nodes  # another engine: the material is left alone
+    scene.render.engine = "SPECTRAL_VOLUME"
+    bpy.context.view_layer.update()
+    assert PRINCIPLED in material.node_tree.nodes
