@@ -63,7 +63,9 @@ def download_wheel(filename: str, dest: Path) -> None:
     command = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps", "--only-binary=:all:",
                "--dest", str(dest), f"{name}=={version}"]
     if platform_tag != "any":
-        command += ["--python-version", python_tag.removeprefix("cp")[0] + "." + python_tag.removeprefix("cp")[1:]]
+        if python_tag.startswith("cp"):  # built for one CPython (cp313 → 3.13); py3 wheels: this interpreter's
+            digits = python_tag.removeprefix("cp")
+            command += ["--python-version", digits[0] + "." + digits[1:]]
         for tag in platform_tag.split("."):
             command += ["--platform", tag]
     print(f"downloading {filename}", flush=True)
