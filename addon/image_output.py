@@ -10,7 +10,6 @@ import numpy as np
 from .export.camera import Region, render_region
 from .pixels import blender_rows, with_alpha
 from .tracer import denoise, image_io
-from .tracer.denoise import denoised_rgb
 
 COLORSPACE = "Linear Rec.709"
 
@@ -44,7 +43,7 @@ def denoising(settings) -> tuple[bool, str]:
 def passes(film, region: Region | None = None, denoised: bool = False) -> Passes:
     """The film's passes, placed at `region` in a frame of zeros when one is given; with `denoised`, the RGB
     (Combined) image is denoised (addon/tracer/denoise.py) while XYZ and variance stay as rendered."""
-    rgb = denoised_rgb(film) if denoised else film.rgb()
+    rgb = denoise.denoised_rgb(film) if denoised else film.rgb()
     rendered = Passes(film.xyz, rgb, film.variance, np.ones((film.height, film.width)))
     if region is None:
         return rendered

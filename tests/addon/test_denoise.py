@@ -30,10 +30,25 @@ def denoised_scene(tmp_path):
     return scene
 
 
+def raw_film(scene):
+    """The raw film F12 renders (same scene, seed and samples)."""
+    return render(export_scene(bpy.context.evaluated_depsgraph_get()).scene).film
+
+
 def raw_and_converged(scene):
-    """The raw film F12 renders (same scene, seed and samples) and a converged render's RGB."""
+    """The raw film F12 renders and a converged render's RGB."""
     exported = export_scene(bpy.context.evaluated_depsgraph_get()).scene
     return render(exported).film, render(exported, spp=512, seed=12345).film.rgb()
+
+
+def f12_exr(scene, tmp_path):
+    """F12 with the scene written as a multilayer EXR: its channels, and its Combined RGB."""
+    scene.render.engine = "SPECTRAL_VOLUME"
+    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    scene.render.filepath = str(tmp_path / "f12.exr")
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    channels = image_io.read_exr(tmp_path / "f12.exr")
+    return channels, np.stack([channels[f"ViewLayer.Combined.{c}"] for c in "RGB"], axis=-1)
 
 
 def rmse(image, reference):
@@ -42,12 +57,7 @@ def rmse(image, reference):
 
 def test_f12_denoises_combined_only(registered, tmp_path):
     scene = denoised_scene(tmp_path)
-    scene.render.engine = "SPECTRAL_VOLUME"
-    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
-    scene.render.filepath = str(tmp_path / "f12.exr")
-    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
-    channels = image_io.read_exr(tmp_path / "f12.exr")
-    combined = np.stack([channels[f"ViewLayer.Combined.{c}"] for c in "RGB"], axis=-1)
+    channels, combined = f12_exr(scene, tmp_path)
     film, converged = raw_and_converged(scene)
     assert not np.allclose(combined, film.rgb(), rtol=1e-3, atol=1e-4)
     assert rmse(combined, converged) < 0.8 * rmse(film.rgb(), converged)
@@ -70,14 +80,8 @@ def test_render_to_image_denoises_its_image_not_the_exr_passes(registered, tmp_p
 def test_without_oidn_f12_warns_and_writes_the_raw_image(registered, tmp_path, monkeypatch):
     monkeypatch.setattr(denoise, "_loaded", (None, NOT_HERE))
     scene = denoised_scene(tmp_path)
-    scene.render.engine = "SPECTRAL_VOLUME"
-    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
-    scene.render.filepath = str(tmp_path / "f12.exr")
-    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
-    channels = image_io.read_exr(tmp_path / "f12.exr")
-    combined = np.stack([channels[f"ViewLayer.Combined.{c}"] for c in "RGB"], axis=-1)
-    film, _converged = raw_and_converged(scene)
-    np.testing.assert_allclose(combined, film.rgb(), rtol=1e-4, atol=1e-6)
+    _channels, combined = f12_exr(scene, tmp_path)
+    np.testing.assert_allclose(combined, raw_film(scene).rgb(), rtol=1e-4, atol=1e-6)
 
 
 def test_the_cli_denoises_its_png_and_combined(registered, tmp_path):

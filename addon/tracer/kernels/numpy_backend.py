@@ -505,7 +505,7 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
     ids = paths.id[rows]
     beta = paths.beta[rows]
     tau = fl.tau[ids]
-    guides = (np.ones(rows.size), front_guide(tau), back_guide(tau))
+    guides = None  # each reservoir's guide at each row's τ, once some medium offers (never without a dye)
     for m in range(ks.density_scale.shape[0]):
         if ks.fluor_strength[m] <= 0.0:  # no dye: nothing to offer
             continue
@@ -516,6 +516,8 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
         if not offering.size:
             continue
         weight = source[offering] / (sigma_bar[offering] * mean_r_u[offering])
+        if guides is None:
+            guides = (None, front_guide(tau), back_guide(tau))
         u = _draw(paths, rows[offering])
         for k in range(RESERVOIRS):
             guided = weight if k == 0 else weight * guides[k][offering]
