@@ -5,7 +5,7 @@ volume's colour, density and anisotropy before any spectral render.
 The two nodes (`PRINCIPLED`, and `OUTPUT`, a Material Output whose target is EEVEE) are added to the
 material's node tree beside whatever the user has there: Cycles and the Cycles emulation never read an
 EEVEE-only output, and nothing else in the tree changes. The values are the spectra seen by eye under D65:
-- Color: the albedo's swatch (`export.swatch`: its colour under D65);
+- Color: the albedo's swatch (`props.swatch`: its colour under D65);
 - Density: Density Scale × the extinction averaged with the weight D65 × ȳ (what the eye sees dimmed);
 - Anisotropy: g at 550 nm.
 Fluorescence and blackbody glow are not shown (EEVEE has no spectral light to excite or to colour them).
@@ -17,8 +17,8 @@ every change while this engine renders settles after one round.
 import bpy
 import numpy as np
 
-from .export.spectra import to_spectrum
-from .export.swatch import preview_colour
+from .props.spectrum_values import to_spectrum
+from .props.swatch import preview_colour
 from .props.render import ENGINE_ID
 from .tracer import colorimetry, spectra
 from .tracer.errors import SpectralError

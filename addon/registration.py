@@ -7,7 +7,7 @@ so adding a class means adding it to its module's list, nowhere else.
 
 import bpy
 
-from . import cli, curves, engine, material_preview
+from . import cli, engine, material_preview
 from .operators import albedo_levels
 from .operators import emulation as emulation_operators
 from .operators import export as export_operators
@@ -15,7 +15,7 @@ from .operators import import_scene as import_operators
 from .operators import presets as preset_operators
 from .operators import render_image
 from .operators import spectrum as spectrum_operators
-from .props import attach, light, material, render, spectrum
+from .props import attach, curves, light, material, render, spectrum
 from .ui import lighting, material as material_ui, presets as preset_ui, render as render_ui, sidebar
 
 MODULES = (curves, spectrum, material, light, render, attach, engine, material_preview, spectrum_operators, preset_operators,

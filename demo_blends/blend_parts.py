@@ -8,7 +8,7 @@ back to the scenes of `scenes`. Needs `bpy` with the add-on registered.
 
 import bpy
 
-from addon import curves
+from addon.props import curves
 from addon.importer import parts
 from addon.tracer.scene import RenderSettings
 from addon.tracer.wavelengths import GRID

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from ..tracer.scene import Light
-from .spectra import to_spectrum
+from ..props.spectrum_values import to_spectrum
 
 SUPPORTED = ("SUN", "POINT", "SPOT")
 

@@ -4,7 +4,7 @@ import numpy as np
 
 from ..tracer.errors import SpectralError
 from ..tracer.scene import BlackbodyEmission, Fluorescence, Grid, Medium
-from .spectra import to_spectrum
+from ..props.spectrum_values import to_spectrum
 
 
 def materials(obj, depsgraph=None) -> list:

@@ -9,7 +9,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
-from .. import curves
+from ..props import curves
 from ..export.lights import point_intensity
 from ..props.render import ENGINE_ID
 from ..tracer import grids, spectra

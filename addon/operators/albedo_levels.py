@@ -2,7 +2,7 @@
 
 import bpy
 
-from .. import curves
+from ..props import curves
 
 
 class SPECTRAL_OT_albedo_level_add(bpy.types.Operator):

@@ -4,8 +4,8 @@ import bpy
 import numpy as np
 from bpy_extras.io_utils import ImportHelper
 
-from .. import curves
-from ..export.spectra import to_spectrum
+from ..props import curves
+from ..props.spectrum_values import to_spectrum
 from ..props.spectrum import CSV_UNIT_ITEMS
 from ..tracer import spectra
 from ..tracer.errors import SpectralError

@@ -14,7 +14,7 @@ where Blender's Add Preset writes them and from where they can be shared.
 
 from pathlib import Path
 
-from .. import curves
+from ..props import curves
 
 BUILT_IN = Path(__file__).parent  # <subdir>/*.py: the built-in preset files
 SEARCH_PATH = BUILT_IN.parent  # for bpy.utils.register_preset_path, which looks in its presets/<subdir>

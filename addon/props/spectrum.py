@@ -2,14 +2,15 @@
 
 One PropertyGroup per role, because each role offers its own sources and defaults and previews
 differently: a light's colour, a reflectance under D65, the colour transmitted through an absorber.
-`addon.export.spectra.to_spectrum` turns any of them into a tracer Spectrum.
+`spectrum_values.to_spectrum` turns any of them into a tracer Spectrum.
 """
 
 import bpy
 
-from .. import curves
-from ..curves import SpectralCurve
-from ..tracer.spectra import ILLUMINANT_NAMES, RGB_METHODS
+from . import curves
+from .curves import SpectralCurve
+from .swatch import preview_colour
+from ..tracer.spectra import BANDS, ILLUMINANT_NAMES, RGB_METHODS
 from ..tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
 
 SOURCES = {
@@ -21,14 +22,6 @@ SOURCES = {
     "COLOR": ("Color", "A smooth spectrum with this RGB color (Jakob–Hanika 2019 or Otsu 2018 recovery)"),
     "CURVE": ("Curve", "Drawn in a curve editor, wavelength along x"),
     "CSV": ("CSV File", "Imported from a file of wavelength, value rows"),
-}
-# Narrow bands: (label, peak nm, standard deviation nm).
-BANDS = {
-    "UV254": ("UV-C 254 nm", 254.0, 4.0),
-    "UV365": ("UV-A 365 nm", 365.0, 6.0),
-    "V405": ("Violet 405 nm", 405.0, 6.0),
-    "B450": ("Blue 450 nm", 450.0, 8.0),
-    "G532": ("Green 532 nm", 532.0, 2.0),
 }
 CSV_UNIT_ITEMS = [("nm", "nm", "Nanometres"), ("um", "µm", "Micrometres"), ("A", "Å", "Ångström")]
 ILLUMINANT_LABELS = {"E": "E (equal energy)", "A": "A (tungsten)", "D65": "D65 (daylight)", "D50": "D50 (horizon)"}
@@ -48,8 +41,6 @@ def _source_changed(self, _context):
 
 
 def _preview(self):
-    from ..export.swatch import preview_colour  # here: export.spectra imports this module
-
     return preview_colour(self)
 
 

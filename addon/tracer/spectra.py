@@ -28,6 +28,14 @@ ILLUMINANT_NAMES = (
     *(f"FL{i}" for i in range(1, 13)),
     "LED-B1", "LED-B2", "LED-B3", "LED-B4", "LED-B5", "LED-BH1", "LED-RGB1", "LED-V1", "LED-V2",
 )
+# Named narrow bands (lamp and laser lines), Gaussian peaks: (label, peak nm, standard deviation nm).
+BANDS = {
+    "UV254": ("UV-C 254 nm", 254.0, 4.0),
+    "UV365": ("UV-A 365 nm", 365.0, 6.0),
+    "V405": ("Violet 405 nm", 405.0, 6.0),
+    "B450": ("Blue 450 nm", 450.0, 8.0),
+    "G532": ("Green 532 nm", 532.0, 2.0),
+}
 # The description types of `from_spec` and the fields each takes besides "type"; any other field is an error.
 SPEC_FIELDS = {
     "constant": ("value",),

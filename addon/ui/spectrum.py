@@ -2,8 +2,8 @@
 
 from bpy.app.translations import pgettext_iface as iface_
 
-from .. import curves
-from ..export.spectra import problem
+from ..props import curves
+from ..props.spectrum_values import problem
 from ..operators.targets import point_at
 
 LIGHT_PRESETS = "SPECTRAL_PT_light_presets"

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from addon import curves, dispatch
+from addon import dispatch
+from addon.props import curves
 from addon.tracer import image_io, spectra
 from tests.addon.builders import basic_scene
 

@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from addon import curves, presets
+from addon import presets
+from addon.props import curves
 from tests.addon.recording import draw
 
 bpy = pytest.importorskip("bpy")

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import addon
-from addon import curves
-from addon.export.spectra import to_spectrum
+from addon.props import curves
+from addon.props.spectrum_values import to_spectrum
 from addon.tracer import spectra
 from addon.tracer.errors import SpectralError
 from addon.tracer.wavelengths import GRID

@@ -7,8 +7,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from addon import curves, registration
-from addon.export.spectra import to_spectrum
+from addon import registration
+from addon.props import curves
+from addon.props.spectrum_values import to_spectrum
 from addon.props.render import ENGINE_ID
 from addon.tracer.errors import SpectralError
 
@@ -160,7 +161,7 @@ def test_import_csv_rejects_a_bad_file_and_changes_nothing(registered, tmp_path)
 
 
 def test_edit_as_curve_keeps_the_shape(registered):
-    from addon.export.spectra import to_spectrum
+    from addon.props.spectrum_values import to_spectrum
 
     albedo = bpy.data.materials.new("Red").spectral.albedo
     albedo.source = "COLOR"
@@ -187,7 +188,7 @@ def test_missing_curve_is_reported_not_raised(registered):
     albedo = bpy.data.materials.new("Lost").spectral.albedo
     albedo.source = "CURVE"
     curves.discard(albedo.curve)
-    from addon.export.spectra import to_spectrum
+    from addon.props.spectrum_values import to_spectrum
     with pytest.raises(SpectralError, match="the curve is missing"):
         to_spectrum(albedo)
 

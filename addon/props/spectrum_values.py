@@ -14,8 +14,7 @@ from collections import OrderedDict
 import bpy
 import numpy as np
 
-from .. import curves
-from ..props.spectrum import BANDS
+from . import curves
 from ..tracer import spectra
 from ..tracer.errors import SpectralError
 from ..tracer.spectra import Spectrum
@@ -118,7 +117,7 @@ def _shape(settings) -> Spectrum:
     if source == "BLACKBODY":
         return spectra.blackbody(settings.temperature)
     if source == "BAND":
-        _label, peak, width = BANDS[settings.band]
+        _label, peak, width = spectra.BANDS[settings.band]
         return spectra.gaussian(peak, width, getattr(settings, "value", 1.0))
     if source == "GAUSSIAN":
         return spectra.gaussian(settings.peak, settings.width, getattr(settings, "value", 1.0))

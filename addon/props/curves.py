@@ -13,7 +13,7 @@ Blender limits a curve's clipping rectangle to ±100, so x is the wavelength in 
 import bpy
 import numpy as np
 
-from .tracer.wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
+from ..tracer.wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
 NM_PER_X = 100.0
 GROUP_PREFIX = ".Spectral curves"

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..tracer import colorimetry, spectra
 from ..tracer.errors import SpectralError
-from .spectra import cached, to_spectrum
+from .spectrum_values import cached, to_spectrum
 
 
 def spectrum_colour(spectrum: spectra.Spectrum, role: str) -> np.ndarray:
