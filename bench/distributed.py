@@ -29,7 +29,8 @@ from addon.tracer import distributed, spectra  # noqa: E402
 from addon.tracer import render as single  # noqa: E402
 from addon.tracer.film import Film  # noqa: E402
 from addon.tracer.procedural import cloud_grid  # noqa: E402
-from addon.tracer.scene import Camera, Light, Medium, RenderSettings, Scene  # noqa: E402
+from addon.tracer.builders import environment, medium, scene, sun  # noqa: E402
+from addon.tracer.scene import Camera, Scene  # noqa: E402
 
 FULL = {"width": 120, "height": 90, "spp": 128, "tile_size": 32}  # about 30 s on one core
 QUICK = {"width": 32, "height": 24, "spp": 24, "tile_size": 8}
@@ -37,17 +38,12 @@ QUICK = {"width": 32, "height": 24, "spp": 24, "tile_size": 8}
 
 def cloud_scene(width: int, height: int, spp: int, bands: int = 1) -> Scene:
     """A procedural cumulus under a D65 sun and a uniform sky, seen from the side."""
-    medium = Medium(name="cloud", density=cloud_grid(resolution=48, size=2.0, seed=7), density_scale=12.0,
-                    extinction=spectra.constant(1.0), albedo_densities=np.array([0.0]),
-                    albedo_table=spectra.constant(0.95).values[None, :], anisotropy=spectra.constant(0.6))
-    direction = np.array([0.5, -0.4, 0.75])
-    sun = Light(kind="sun", spectrum=spectra.illuminant("D65"), strength=2.0,
-                direction=direction / np.linalg.norm(direction), angle=np.radians(0.5))
-    sky = Light(kind="environment", spectrum=spectra.illuminant("D65"), strength=0.3)
+    cloud = medium(cloud_grid(resolution=48, size=2.0, seed=7), 12.0, name="cloud", albedo=0.95, g=0.6)
+    d65 = spectra.illuminant("D65")
+    lights = (sun((0.5, -0.4, 0.75), 2.0, angle=np.radians(0.5), spectrum=d65), environment(0.3, d65))
     to_world = np.array([[1.0, 0, 0, 0], [0, 0, -1, -4.5], [0, 1, 0, 0], [0, 0, 0, 1]])  # at −y, looking +y
     camera = Camera(to_world=to_world, width=width, height=height, fov=np.radians(40.0))
-    return Scene(camera=camera, media=(medium,), lights=(sun, sky),
-                 settings=RenderSettings(spp=spp, seed=1, bands=bands))
+    return scene(camera, (cloud,), lights, spp=spp, seed=1, bands=bands)
 
 
 def timed(function):

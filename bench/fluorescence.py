@@ -25,9 +25,10 @@ import numpy as np
 from scipy.special import expn
 
 from addon.tracer import colorimetry, spectra
+from addon.tracer.builders import box_grid, medium, scene
 from addon.tracer.lowering import compile_scene
 from addon.tracer.render import render_unit
-from addon.tracer.scene import Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
+from addon.tracer.scene import Camera, Fluorescence, Light, Scene
 from addon.tracer.wavelengths import GRID
 
 from bench.measure import machine, warm_up
@@ -64,21 +65,14 @@ def excitation_level(source_thickness: float) -> float:
 
 
 def slab_scene(source_thickness: float, pixels: int) -> Scene:
-    cells = (16, 16, 4)
-    step = np.array([WIDTH, WIDTH, THICKNESS]) / cells
-    index_to_world = np.diag([*step, 1.0])
-    index_to_world[:3, 3] = -0.5 * np.array([WIDTH, WIDTH, THICKNESS]) + 0.5 * step
-    density = Grid(np.ones(cells, dtype=np.float32), index_to_world, name="density")
+    density = box_grid((16, 16, 4), (WIDTH, WIDTH, THICKNESS))
     excitation = spectra.Spectrum(EXCITATION.values * excitation_level(source_thickness))
-    medium = Medium(name="dye", density=density, density_scale=1.0, extinction=spectra.constant(0.0),
-                    albedo_densities=np.array([0.0]), albedo_table=spectra.constant(1.0).values[None, :],
-                    anisotropy=spectra.constant(0.0),
-                    fluorescence=Fluorescence(excitation, EMISSION, QUANTUM_YIELD))
+    dye = medium(density, name="dye", extinction=0.0, fluorescence=Fluorescence(excitation, EMISSION, QUANTUM_YIELD))
     light = Light(kind="environment", spectrum=UV, strength=UV_WATTS, unit="radiant", name="uv")
     to_world = np.eye(4)
     to_world[2, 3] = 6.0  # looking down −z at the slab
     camera = Camera(to_world=to_world, width=pixels, height=pixels, kind="orthographic", ortho_scale=0.5)
-    return Scene(camera=camera, media=(medium,), lights=(light,), settings=RenderSettings(max_depth=64))
+    return scene(camera, (dye,), (light,), max_depth=64)
 
 
 FINE = np.arange(GRID[0], GRID[-1], 0.01)  # the ∫ dλ' of the closed form, over the linearly interpolated spectra

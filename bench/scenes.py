@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from addon.tracer import spectra
+from addon.tracer.builders import environment, medium, perspective, scene, smooth_ramp, sun
 from addon.tracer.procedural import cloud_grid
-from addon.tracer.scene import Camera, Grid, Light, Medium, RenderSettings, Scene, look_at
-from addon.tracer.wavelengths import GRID
+from addon.tracer.scene import Camera, Grid, Light, Medium, Scene
 
 ROOT = Path(__file__).resolve().parent.parent
 CACHE = ROOT / "out" / "bench-cache"
@@ -109,39 +109,32 @@ def density_grid(spec: CloudSpec) -> Grid:
 
 
 def _smooth(lo_value: float, hi_value: float) -> spectra.Spectrum:
-    """A spectrum varying smoothly from `lo_value` at 380 nm to `hi_value` at 700 nm (flat beyond)."""
-    t = np.clip((GRID - 380.0) / 320.0, 0.0, 1.0)
-    return spectra.Spectrum(lo_value + (hi_value - lo_value) * (3 * t**2 - 2 * t**3))
+    """A spectrum going smoothly from `lo_value` at 380 nm to `hi_value` at 700 nm (flat beyond)."""
+    return smooth_ramp(lo_value, hi_value, 380.0, 700.0)
 
 
 def cloud_medium(spec: CloudSpec, density: Grid) -> Medium:
-    extinction = _smooth(1.4, 0.7) if spec.extinction_varies else spectra.constant(1.0)
-    albedo = _smooth(0.6, 0.95) if spec.albedo_varies else spectra.constant(spec.albedo)
-    anisotropy = _smooth(0.0, 0.8) if spec.g_varies else spectra.constant(spec.g)
-    return Medium(name="cloud", density=density, density_scale=spec.density_scale, extinction=extinction,
-                  albedo_densities=np.array([0.0]), albedo_table=albedo.values[None, :], anisotropy=anisotropy)
+    return medium(density, spec.density_scale, name="cloud",
+                  extinction=_smooth(1.4, 0.7) if spec.extinction_varies else 1.0,
+                  albedo=_smooth(0.6, 0.95) if spec.albedo_varies else spec.albedo,
+                  g=_smooth(0.0, 0.8) if spec.g_varies else spec.g)
 
 
 def lights(spec: CloudSpec) -> tuple[Light, ...]:
-    direction = np.asarray(SUN_DIRECTION, dtype=np.float64)
-    sun = Light(kind="sun", spectrum=spectra.illuminant("D65"), strength=spec.sun_strength,
-                direction=direction / np.linalg.norm(direction), angle=0.0, name="sun")
-    sky = Light(kind="environment", spectrum=spectra.constant(1.0), strength=spec.environment_strength,
-                name="environment")
-    return tuple(light for light in (sun, sky) if light.strength > 0)
+    both = (sun(SUN_DIRECTION, spec.sun_strength, spectrum=spectra.illuminant("D65"), name="sun"),
+            environment(spec.environment_strength, name="environment"))
+    return tuple(light for light in both if light.strength > 0)
 
 
 def camera(spec: CloudSpec) -> Camera:
-    return Camera(to_world=look_at(EYE, TARGET), width=spec.width, height=spec.height,
-                  fov=np.radians(spec.fov_degrees))
+    return perspective(EYE, TARGET, spec.width, spec.height, spec.fov_degrees)
 
 
 def cloud_scene(spec: CloudSpec, density: Grid | None = None, **settings) -> Scene:
     """The benchmark scene for `spec`; `settings` are RenderSettings fields (wavelengths_per_path, …)."""
     if density is None:
         density = density_grid(spec)
-    return Scene(camera=camera(spec), media=(cloud_medium(spec, density),), lights=lights(spec),
-                 settings=RenderSettings(**settings))
+    return scene(camera(spec), (cloud_medium(spec, density),), lights(spec), **settings)
 
 
 def orientation_grid(cells: int = 8) -> Grid:

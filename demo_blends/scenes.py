@@ -12,77 +12,17 @@ towards +x.
 import numpy as np
 
 from addon.tracer import spectra
-from addon.tracer.scene import (BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene,
-                                 look_at)
+from addon.tracer.builders import (cell_centres, direction, environment, medium, perspective, sampled_grid, scene,
+                                   smooth_step, sun)
+from addon.tracer.scene import BlackbodyEmission, Camera, Fluorescence, Grid, Medium, Scene, look_at
 from addon.tracer.wavelengths import GRID
 
-# ----------------------------------------------------------------------------- shared helpers
-
-
-def camera(eye, target, width: int, height: int, fov_degrees: float) -> Camera:
-    """A perspective camera; `fov_degrees` spans the image's wider axis."""
-    return Camera(to_world=look_at(eye, target), width=width, height=height, fov=np.radians(fov_degrees))
-
-
-def direction(elevation: float, azimuth: float) -> np.ndarray:
-    """Unit vector at `elevation` degrees above the horizon, `azimuth` degrees from +y towards +x."""
-    e, a = np.radians(elevation), np.radians(azimuth)
-    return np.array([np.cos(e) * np.sin(a), np.cos(e) * np.cos(a), np.sin(e)])
-
-
-def cell_centres(cells, lo, hi):
-    """Coordinates (x, y, z as broadcastable arrays) of the centres of `cells` cells filling the box
-    [lo, hi], and the grid's index-to-world matrix."""
-    cells, lo, hi = np.asarray(cells), np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
-    step = (hi - lo) / cells
-    axes = [lo[i] + (np.arange(cells[i]) + 0.5) * step[i] for i in range(3)]
-    index_to_world = np.diag(np.append(step, 1.0))
-    index_to_world[:3, 3] = lo + 0.5 * step
-    return np.meshgrid(*axes, indexing="ij", sparse=True), index_to_world
-
-
-def sampled_grid(field, cells, lo, hi, name: str = "density") -> Grid:
-    """A grid of `field(x, y, z)` (NumPy-broadcasting) at the centres of `cells` cells filling [lo, hi]."""
-    (x, y, z), index_to_world = cell_centres(cells, lo, hi)
-    values = np.broadcast_to(field(x, y, z), tuple(cells)).astype(np.float32)
-    return Grid(np.ascontiguousarray(values), index_to_world, name=name)
+SEED = 1  # every demo renders with this seed: the same image on every run
 
 
 def uniform(x, y, z):
     """Density 1 everywhere (a field for `sampled_grid`)."""
     return np.ones(np.broadcast_shapes(x.shape, y.shape, z.shape))
-
-
-def as_spectrum(value) -> spectra.Spectrum:
-    return value if isinstance(value, spectra.Spectrum) else spectra.constant(value)
-
-
-def medium(name: str, density: Grid, scale: float, *, extinction=1.0, albedo=1.0, g=0.0, phase: str = "hg",
-           fluorescence=None, emission=None) -> Medium:
-    """A medium whose extinction, albedo (the same at every density) and anisotropy are numbers or spectra."""
-    return Medium(name=name, density=density, density_scale=float(scale), extinction=as_spectrum(extinction),
-                  albedo_densities=np.array([0.0]), albedo_table=as_spectrum(albedo).values[None, :],
-                  anisotropy=as_spectrum(g), phase=phase, fluorescence=fluorescence, emission=emission)
-
-
-def sun(spectrum: spectra.Spectrum, strength: float, elevation: float, azimuth: float = 0.0,
-        angle_degrees: float = 0.0, name: str = "sun") -> Light:
-    """A sun `strength` (irradiance Y) from (elevation, azimuth), with an angular diameter."""
-    return Light(kind="sun", spectrum=spectrum, strength=strength, direction=direction(elevation, azimuth),
-                 angle=np.radians(angle_degrees), name=name)
-
-
-def smooth_step(edge_nm: float, width_nm: float) -> np.ndarray:
-    """0 well below `edge_nm`, 1 well above, a logistic step of about `width_nm` (values on GRID)."""
-    return 1.0 / (1.0 + np.exp(-(GRID - edge_nm) / (0.25 * width_nm)))
-
-
-SEED = 1  # every demo renders with this seed: the same image on every run
-
-
-def scene(cam: Camera, media, lights, spp: int, **settings) -> Scene:
-    return Scene(camera=cam, media=tuple(media), lights=tuple(lights),
-                 settings=RenderSettings(spp=spp, seed=SEED, **settings))
 
 
 # ----------------------------------------------------------------------------- Rayleigh skies
@@ -98,20 +38,20 @@ def ground(albedo: float = 0.35) -> Medium:
     """A dense grey layer below z = 0 standing in for the ground."""
     w = ATMOSPHERE_HALF_WIDTH
     grid = sampled_grid(uniform, (4, 4, 4), (-w, -w, -0.2), (w, w, 0.0))
-    return medium("ground", grid, 200.0, albedo=albedo)
+    return medium(grid, 200.0, name="ground", albedo=albedo)
 
 
 def atmosphere(name: str, extinction, **optics) -> Medium:
     """A slab of air from the ground to ATMOSPHERE_TOP, constant density 1, σ_t = extinction(λ)."""
     w = ATMOSPHERE_HALF_WIDTH
     grid = sampled_grid(uniform, (8, 8, 32), (-w, -w, 0.0), (w, w, ATMOSPHERE_TOP))
-    return medium(name, grid, 1.0, extinction=extinction, **optics)
+    return medium(grid, 1.0, name=name, extinction=extinction, **optics)
 
 
 def sky_camera(width: int, height: int, pitch: float, fov: float = 100.0) -> Camera:
     """A camera just above the ground looking along +y, tilted `pitch` degrees up."""
     eye = np.array([0.0, 0.0, SKY_CAMERA_HEIGHT])
-    return camera(eye, eye + direction(pitch, 0.0), width, height, fov)
+    return perspective(eye, eye + direction(pitch, 0.0), width, height, fov)
 
 
 # The report's setup: albedo 0.8 everywhere, g rising from 0 at 380 nm to strongly forward at 700 nm.
@@ -120,7 +60,7 @@ def sky_camera(width: int, height: int, pitch: float, fov: float = 100.0) -> Cam
 REPORT_ALBEDO = 0.8
 REPORT_G_MAX = 0.95
 REPORT_TAU = 0.5  # vertical optical depth (the same at every λ)
-REPORT_SUN = dict(elevation=22.0, azimuth=32.0)
+REPORT_SUN = (22.0, 32.0)  # elevation, azimuth (degrees)
 
 
 def report_anisotropy() -> spectra.Spectrum:
@@ -132,8 +72,8 @@ def rayleigh_report(width: int, height: int, spp: int) -> Scene:
     with wavelength, so red goes on forward (around the sun) and blue is spread over the sky."""
     air = atmosphere("air", REPORT_TAU / ATMOSPHERE_TOP, albedo=REPORT_ALBEDO,
                      g=report_anisotropy())
-    light = sun(FLAT, 5.0, angle_degrees=SUN_ANGLE, **REPORT_SUN)
-    return scene(sky_camera(width, height, pitch=14.0), (air, ground()), (light,), spp)
+    light = sun(direction(*REPORT_SUN), 5.0, angle=np.radians(SUN_ANGLE), spectrum=FLAT, name="sun")
+    return scene(sky_camera(width, height, pitch=14.0), (air, ground()), (light,), spp=spp, seed=SEED)
 
 
 # True Rayleigh: σ_t ∝ λ⁻⁴, Rayleigh phase function, no absorption; a low sun (sunset). Pure Rayleigh
@@ -141,7 +81,7 @@ def rayleigh_report(width: int, height: int, spp: int) -> Scene:
 # e^(−τ) − e^(−mτ) for air mass m, which is pale once τ(450 nm)·m ≳ 1): this optical depth and sun
 # height give a blue upper sky and an orange sun.
 RAYLEIGH_TAU_550 = 0.12  # vertical optical depth at 550 nm (the Earth's is about 0.1)
-RAYLEIGH_SUN = dict(elevation=4.0, azimuth=32.0)
+RAYLEIGH_SUN = (4.0, 32.0)
 
 
 def rayleigh_true(width: int, height: int, spp: int) -> Scene:
@@ -150,8 +90,8 @@ def rayleigh_true(width: int, height: int, spp: int) -> Scene:
     # Only visible light is traced, so the λ⁻⁴ law stops at 360 nm: below it would only raise the majorant.
     extinction = spectra.Spectrum(np.where(GRID >= 360.0, (550.0 / GRID) ** 4, 0.0) * RAYLEIGH_TAU_550 / ATMOSPHERE_TOP)
     air = atmosphere("air", extinction, albedo=1.0, phase="rayleigh")
-    light = sun(FLAT, 3.0, angle_degrees=SUN_ANGLE, **RAYLEIGH_SUN)
-    return scene(sky_camera(width, height, pitch=24.0), (air, ground()), (light,), spp)
+    light = sun(direction(*RAYLEIGH_SUN), 3.0, angle=np.radians(SUN_ANGLE), spectrum=FLAT, name="sun")
+    return scene(sky_camera(width, height, pitch=24.0), (air, ground()), (light,), spp=spp, seed=SEED)
 
 
 # ----------------------------------------------------------------------------- shapes for procedural volumes
@@ -244,30 +184,30 @@ def frog_medium(cells=(96, 100, 44)) -> Medium:
     grid = sampled_grid(solid(frog_shape(), edge=0.04), cells, *FROG_BOX)
     fluorescence = Fluorescence(excitation=FROG_EXCITATION, emission=FROG_EMISSION,
                                 quantum_yield=FROG_QUANTUM_YIELD)
-    return medium("frog", grid, FROG_DENSITY, extinction=0.0, albedo=0.0, fluorescence=fluorescence)
+    return medium(grid, FROG_DENSITY, name="frog", extinction=0.0, albedo=0.0, fluorescence=fluorescence)
 
 
 def frog_pupils() -> Medium:
     """Black pupils at the front of the eyes (they absorb everything; not fluorescent)."""
     pupils = union(*(ellipsoid(np.add(eye, (0.0, 0.09, 0.01)), (0.075, 0.06, 0.075)) for eye in EYES))
     grid = sampled_grid(solid(pupils, edge=0.02), (48, 16, 16), (-0.45, 0.72, 0.75), (0.45, 0.92, 1.0))
-    return medium("pupils", grid, 200.0, albedo=0.0)
+    return medium(grid, 200.0, name="pupils", albedo=0.0)
 
 
 def lily_pad() -> Medium:
     """A white, non-fluorescent disc under the frog: it shows the colour of the lamp."""
     pad = solid(lambda x, y, z: np.maximum(np.hypot(x, y - 0.05) - 1.7, np.abs(z + 0.07) - 0.07), edge=0.03)
     grid = sampled_grid(pad, (72, 72, 6), (-1.8, -1.75, -0.16), (1.8, 1.85, 0.02))
-    return medium("pad", grid, 40.0, albedo=0.5)
+    return medium(grid, 40.0, name="pad", albedo=0.5)
 
 
 def fluorescent_frog(width: int, height: int, spp: int) -> Scene:
     """A frog lit by a UV/violet lamp glows green: the green comes only from fluorescence."""
     # Strengths are luminances (Y), and violet has very little: Y = 0.04 is already a bright violet.
-    lamp = sun(UV_LAMP, 0.05, elevation=45.0, azimuth=-30.0, name="UV lamp")
-    fill = Light(kind="environment", spectrum=UV_LAMP, strength=0.001, name="UV fill")
-    cam = camera((-2.4, 4.6, 2.3), (0.0, 0.05, 0.35), width, height, 42.0)
-    return scene(cam, (frog_medium(), lily_pad(), frog_pupils()), (lamp, fill), spp)
+    lamp = sun(direction(45.0, -30.0), 0.05, spectrum=UV_LAMP, name="UV lamp")
+    fill = environment(0.001, UV_LAMP, name="UV fill")
+    cam = perspective((-2.4, 4.6, 2.3), (0.0, 0.05, 0.35), width, height, 42.0)
+    return scene(cam, (frog_medium(), lily_pad(), frog_pupils()), (lamp, fill), spp=spp, seed=SEED)
 
 
 def fibonacci_directions(count: int) -> np.ndarray:
@@ -279,7 +219,7 @@ def fibonacci_directions(count: int) -> np.ndarray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
 
 
-ENERGY_LAMP = sun(UV_LAMP, 0.05, elevation=90.0, name="UV lamp overhead")  # no angle: never seen
+ENERGY_LAMP = sun(direction(90.0), 0.05, spectrum=UV_LAMP, name="UV lamp overhead")  # no angle: never seen
 
 
 def energy_views(body: Medium, box, size: int, spp: int, views: int = 16) -> list[Scene]:
@@ -294,7 +234,7 @@ def energy_views(body: Medium, box, size: int, spp: int, views: int = 16) -> lis
         to_world = look_at(centre + 3.0 * radius * view, centre, up)
         cameras.append(Camera(to_world=to_world, width=size, height=size, kind="orthographic",
                               ortho_scale=2.0 * radius))
-    return [scene(cam, (body,), (ENERGY_LAMP,), spp) for cam in cameras]
+    return [scene(cam, (body,), (ENERGY_LAMP,), spp=spp, seed=SEED) for cam in cameras]
 
 
 # ----------------------------------------------------------------------------- dense fluorescence: highlighter ink
@@ -325,18 +265,18 @@ def ink_medium(name: str, centre, density: float, cells=(32, 32, 42)) -> Medium:
                                           np.abs(z - INK_HEIGHT / 2) - INK_HEIGHT / 2)
     grid = sampled_grid(solid(cylinder, edge=0.02), cells, *ink_box(centre))
     fluorescence = Fluorescence(excitation=INK_EXCITATION, emission=INK_EMISSION, quantum_yield=INK_QUANTUM_YIELD)
-    return medium(name, grid, density, extinction=0.0, albedo=0.0, fluorescence=fluorescence)
+    return medium(grid, density, name=name, extinction=0.0, albedo=0.0, fluorescence=fluorescence)
 
 
 def highlighter_ink(width: int, height: int, spp: int) -> Scene:
     """Two glasses of highlighter ink under the frog's lamp: the dense one glows only in a thin skin
     facing the lamp, the one diluted 50× glows through its whole volume."""
-    lamp = sun(UV_LAMP, 0.05, elevation=45.0, azimuth=-30.0, name="UV lamp")
-    fill = Light(kind="environment", spectrum=UV_LAMP, strength=0.001, name="UV fill")
-    cam = camera((-0.9, 2.6, 1.3), (0.0, 0.0, 0.36), width, height, 40.0)
+    lamp = sun(direction(45.0, -30.0), 0.05, spectrum=UV_LAMP, name="UV lamp")
+    fill = environment(0.001, UV_LAMP, name="UV fill")
+    cam = perspective((-0.9, 2.6, 1.3), (0.0, 0.0, 0.36), width, height, 40.0)
     media = (ink_medium("ink", INK_CENTRES[0], INK_DENSITY),
              ink_medium("diluted ink", INK_CENTRES[1], INK_DENSITY / INK_DILUTION), lily_pad())
-    return scene(cam, media, (lamp, fill), spp)
+    return scene(cam, media, (lamp, fill), spp=spp, seed=SEED)
 
 
 # ----------------------------------------------------------------------------- metamerism: two cubes
@@ -344,7 +284,7 @@ def highlighter_ink(width: int, height: int, spp: int) -> Scene:
 CUBE_EDGE = 1.0
 CUBE_CENTRES = ((-0.85, 0.0, 0.5), (0.85, 0.0, 0.5))  # mirror images across x = 0
 CUBE_DENSITY = 30.0  # optical depth 30 across a cube: a solid-looking block of scattering medium
-METAMER_SUN = dict(elevation=55.0, azimuth=180.0)  # behind the camera, in the cubes' mirror plane
+METAMER_SUN = (55.0, 180.0)  # behind the camera, in the cubes' mirror plane
 METAMER_FILL = 0.3  # environment luminance relative to the sun's
 
 
@@ -352,19 +292,19 @@ def cube(name: str, centre, albedo) -> Medium:
     """A cube of dense, isotropically scattering medium with the albedo spectrum `albedo`."""
     lo, hi = np.asarray(centre) - CUBE_EDGE / 2, np.asarray(centre) + CUBE_EDGE / 2
     grid = sampled_grid(uniform, (16, 16, 16), lo, hi)
-    return medium(name, grid, CUBE_DENSITY, albedo=albedo)
+    return medium(grid, CUBE_DENSITY, name=name, albedo=albedo)
 
 
 def metamer_camera(width: int, height: int) -> Camera:
-    return camera((0.0, -4.4, 2.5), (0.0, 0.0, 0.4), width, height, 40.0)
+    return perspective((0.0, -4.4, 2.5), (0.0, 0.0, 0.4), width, height, 40.0)
 
 
 def two_cubes(albedo_left, albedo_right, light: spectra.Spectrum, width: int, height: int, spp: int) -> Scene:
     """The two cubes side by side under a sun and a fill light that both have the spectrum `light`.
     The geometry is mirror-symmetric, so a cube's look depends only on its albedo, not its side."""
     media = (cube("left cube", CUBE_CENTRES[0], albedo_left), cube("right cube", CUBE_CENTRES[1], albedo_right))
-    lights = (sun(light, 1.0, **METAMER_SUN), Light(kind="environment", spectrum=light, strength=METAMER_FILL))
-    return scene(metamer_camera(width, height), media, lights, spp)
+    lights = (sun(direction(*METAMER_SUN), 1.0, spectrum=light, name="sun"), environment(METAMER_FILL, light))
+    return scene(metamer_camera(width, height), media, lights, spp=spp, seed=SEED)
 
 
 # The report's simple version: one cube scatters only the short half of the visible range, the other
@@ -435,9 +375,9 @@ def fire(width: int, height: int, spp: int) -> Scene:
     """A flame of black-body emitting soot with grey smoke above it, under a faint night sky."""
     soot, temperature, smoke = fire_grids()
     emission = BlackbodyEmission(temperature=temperature, intensity=FIRE_INTENSITY)
-    flame = medium("flame", soot, 5.0, albedo=0.2, emission=emission)
-    plume = medium("smoke", smoke, 6.0, albedo=0.7)
+    flame = medium(soot, 5.0, name="flame", albedo=0.2, emission=emission)
+    plume = medium(smoke, 6.0, name="smoke", albedo=0.7)
     # A bluish moon from above and behind lights the smoke; the background stays black.
-    moon = sun(spectra.blackbody(MOON_TEMPERATURE), 1.0, elevation=45.0, azimuth=150.0, name="moon")
-    cam = camera((0.0, -4.6, 1.0), (0.0, 0.0, 1.0), width, height, 48.0)
-    return scene(cam, (flame, plume), (moon,), spp)
+    moon = sun(direction(45.0, 150.0), 1.0, spectrum=spectra.blackbody(MOON_TEMPERATURE), name="moon")
+    cam = perspective((0.0, -4.6, 1.0), (0.0, 0.0, 1.0), width, height, 48.0)
+    return scene(cam, (flame, plume), (moon,), spp=spp, seed=SEED)

@@ -10,7 +10,7 @@ from addon.tracer import spectra
 from addon.tracer.scene import BlackbodyEmission, Camera, Fluorescence, Light, Medium
 from addon.tracer.scene_io import save_scene
 from tests.support.scene_compare import assert_same_scene
-from tests.support.scenes import box_grid, scene, smooth_spectrum
+from tests.support.scenes import box_grid, scene, smooth_ramp
 
 bpy = pytest.importorskip("bpy")
 
@@ -29,13 +29,13 @@ def _every_feature():
     glowing = box_grid((6, 5, 4), (1.2, 1.0, 0.8), (-0.8, 0.0, 0.0))
     temperature = box_grid((6, 5, 4), (1.2, 1.0, 0.8), (-0.8, 0.0, 0.0), density=2.0)
     temperature.values[0] = 1.0
-    fire = Medium(name="Fire", density=glowing, density_scale=3.0, extinction=smooth_spectrum(0.9, 0.2),
+    fire = Medium(name="Fire", density=glowing, density_scale=3.0, extinction=smooth_ramp(0.9, 0.2),
                   albedo_densities=np.array([0.0, 0.5]),
-                  albedo_table=np.stack([smooth_spectrum(0.8, 0.3).values, smooth_spectrum(0.2, 0.6).values]),
+                  albedo_table=np.stack([smooth_ramp(0.8, 0.3).values, smooth_ramp(0.2, 0.6).values]),
                   anisotropy=spectra.constant(0.3), emission=BlackbodyEmission(temperature, 0.5, 900.0, 300.0))
     dye = Medium(name="Dye", density=box_grid((4, 4, 4), (1.0, 1.0, 1.0), (0.9, 0.0, 0.0)), density_scale=0.5,
-                 extinction=smooth_spectrum(4.0, 1.0), albedo_densities=np.array([0.0]),
-                 albedo_table=spectra.constant(0.7).values[None, :], anisotropy=smooth_spectrum(-0.2, 0.6),
+                 extinction=smooth_ramp(4.0, 1.0), albedo_densities=np.array([0.0]),
+                 albedo_table=spectra.constant(0.7).values[None, :], anisotropy=smooth_ramp(-0.2, 0.6),
                  phase="hg", fluorescence=Fluorescence(spectra.gaussian(440.0, 30.0, 1.5),
                                                        spectra.gaussian(560.0, 25.0), 0.8))
     lights = [
@@ -43,11 +43,11 @@ def _every_feature():
               angle=np.radians(3.0), name="Sun"),
         Light(kind="point", spectrum=spectra.blackbody(3000.0), strength=4.0, position=np.array([1.0, 2.0, 3.0]),
               name="Bulb"),
-        Light(kind="spot", spectrum=smooth_spectrum(0.2, 1.0), strength=7.0, position=np.array([-2.0, 1.0, 2.0]),
+        Light(kind="spot", spectrum=smooth_ramp(0.2, 1.0), strength=7.0, position=np.array([-2.0, 1.0, 2.0]),
               spot_direction=np.array([0.6, -0.3, -0.74]) / np.linalg.norm([0.6, -0.3, -0.74]),
               spot_size=np.radians(50.0), spot_blend=0.3, name="Spot"),
         Light(kind="sky", spectrum=spectra.blackbody(12000.0), strength=0.4,
-              horizon_spectrum=smooth_spectrum(1.0, 0.4), name="Sky"),
+              horizon_spectrum=smooth_ramp(1.0, 0.4), name="Sky"),
     ]
     return scene(_rotated_camera(), [fire, dye], lights, spp=7, seed=11, max_depth=9, bands=2,
                  wavelength_sampling="uv", wavelengths_per_path=1, lambda_min=300.0, lambda_max=780.0,

@@ -90,7 +90,7 @@ def test_bands_are_narrow_where_the_spectra_change():
 
 
 def test_anisotropy_that_varies_with_wavelength_costs_one_render_per_band():
-    scene = cube_scene(comb(), "A", g=s.smooth_spectrum(0.0, 0.8))
+    scene = cube_scene(comb(), "A", g=s.smooth_ramp(0.0, 0.8))
     plan = band_plan.plan_bands(scene, max_renders=10)
     assert plan.renders == plan.bands.count <= 10
 
@@ -104,7 +104,7 @@ def test_anisotropy_and_extinction_that_vary_with_wavelength_colour_the_estimate
     """Thin grey air under a flat light: exact with one band, unless the phase function (the report's sky:
     g rising with λ) or the extinction (Rayleigh's λ⁻⁴) changes the colour of scattered light."""
     assert band_plan.estimate(cube_scene(0.8, scale=0.2), bands.split(360, 830, 1)) < 1e-6
-    by_phase = cube_scene(0.8, g=s.smooth_spectrum(0.0, 0.9), scale=0.2)
+    by_phase = cube_scene(0.8, g=s.smooth_ramp(0.0, 0.9), scale=0.2)
     thin_blue = s.scene(s.perspective_camera(8, 8), [s.medium(s.box_grid(), scale=0.2, extinction=spectra.Spectrum(
         (GRID / 550.0) ** -4.0), albedo=1.0, phase="rayleigh")], [s.sun([0.2, -0.3, 1.0])])
     for scene in (by_phase, thin_blue):

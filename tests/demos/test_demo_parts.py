@@ -11,7 +11,7 @@ from tests.support.scenes import box_grid, medium
 
 
 def test_pixel_rays_follow_the_camera():
-    camera = scenes.camera((0.0, -5.0, 0.0), (0.0, 0.0, 0.0), 33, 21, 40.0)
+    camera = scenes.perspective((0.0, -5.0, 0.0), (0.0, 0.0, 0.0), 33, 21, 40.0)
     origins, rays = metrics.pixel_rays(camera)
     assert np.allclose(origins, (0.0, -5.0, 0.0))
     assert np.allclose(rays[10, 16], (0.0, 1.0, 0.0))  # the centre pixel looks at the target

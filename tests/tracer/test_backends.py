@@ -60,8 +60,8 @@ def grey_furnace():
 
 def chromatic():
     """Chromatic extinction, albedo and anisotropy: the spectral MIS over 4 wavelengths at work."""
-    medium = s.medium(s.box_grid(), extinction=s.smooth_spectrum(4.0, 0.4), albedo=s.smooth_spectrum(0.95, 0.6),
-                      g=s.smooth_spectrum(-0.3, 0.8))
+    medium = s.medium(s.box_grid(), extinction=s.smooth_ramp(4.0, 0.4), albedo=s.smooth_ramp(0.95, 0.6),
+                      g=s.smooth_ramp(-0.3, 0.8))
     return s.scene(s.perspective_camera(8, 8), [medium], [s.environment(0.5), s.sun([1, 0.5, 1], 2.0)])
 
 
@@ -95,8 +95,8 @@ def blackbody():
 
 def rayleigh():
     """Rayleigh phase under a sky, one wavelength per path drawn uniformly."""
-    sky = Light(kind="sky", spectrum=s.smooth_spectrum(2.0, 0.3), strength=1.0,
-                horizon_spectrum=s.smooth_spectrum(0.6, 1.0))
+    sky = Light(kind="sky", spectrum=s.smooth_ramp(2.0, 0.3), strength=1.0,
+                horizon_spectrum=s.smooth_ramp(0.6, 1.0))
     medium = s.medium(s.box_grid(), extinction=1.5, albedo=0.95, phase="rayleigh")
     return s.scene(s.perspective_camera(8, 8), [medium], [sky], wavelengths_per_path=1,
                    wavelength_sampling="uniform")
@@ -104,7 +104,7 @@ def rayleigh():
 
 def two_media():
     """A chromatic Henyey–Greenstein box overlapping a Rayleigh blob grid of another resolution."""
-    box = s.medium(s.box_grid(), extinction=s.smooth_spectrum(2.0, 1.0), albedo=0.9, g=0.6, name="box")
+    box = s.medium(s.box_grid(), extinction=s.smooth_ramp(2.0, 1.0), albedo=0.9, g=0.6, name="box")
     blobs = s.medium(blob_grid(cells=12, size=1.6, seed=3), scale=3.0, albedo=0.8, phase="rayleigh", name="blobs")
     return s.scene(s.perspective_camera(8, 8), [box, blobs], [s.environment(0.5), s.sun([-1, 0.2, 1])])
 
@@ -114,7 +114,7 @@ def point_and_spot():
     estimator of infinite variance, and image means no statistical bound can hold)."""
     medium = s.medium(s.box_grid(), extinction=0.8, albedo=0.9, g=0.3)
     point = Light(kind="point", spectrum=spectra.constant(1.0), strength=10.0, position=np.array([0.0, -1.8, 1.6]))
-    spot = Light(kind="spot", spectrum=s.smooth_spectrum(0.2, 1.0), strength=20.0, position=np.array([2.0, 0.0, 2.0]),
+    spot = Light(kind="spot", spectrum=s.smooth_ramp(0.2, 1.0), strength=20.0, position=np.array([2.0, 0.0, 2.0]),
                  spot_direction=np.array([-1.0, 0.0, -1.0]), spot_size=np.radians(40), spot_blend=0.3)
     return s.scene(s.perspective_camera(8, 8), [medium], [point, spot])
 

@@ -31,7 +31,7 @@ START_TIMEOUT = 120.0  # seconds for a scheduler or worker process to come up on
 def small_scene(spp=24, bands=2, seed=11):
     box = s.box_grid(cells=(6, 6, 6))
     return s.scene(s.perspective_camera(12, 10, fov_degrees=25.0),
-                   [s.medium(box, extinction=s.smooth_spectrum(3.0, 1.0), albedo=0.8, g=0.3)],
+                   [s.medium(box, extinction=s.smooth_ramp(3.0, 1.0), albedo=0.8, g=0.3)],
                    [s.environment(0.5), s.sun((1.0, 0.5, 2.0), strength=2.0)], spp=spp, bands=bands, seed=seed)
 
 

@@ -43,8 +43,8 @@ def xyz_of(values_on_grid):
 def test_white_furnace_returns_the_environment(chromatic):
     """Albedo 1 inside a uniform environment: every pixel sees the environment's radiance, whatever
     the extinction and anisotropy spectra (this exercises the spectral MIS with 4 wavelengths)."""
-    extinction = s.smooth_spectrum(4.0, 0.4) if chromatic else 2.0
-    g = s.smooth_spectrum(-0.3, 0.8) if chromatic else 0.0
+    extinction = s.smooth_ramp(4.0, 0.4) if chromatic else 2.0
+    g = s.smooth_ramp(-0.3, 0.8) if chromatic else 0.0
     box = s.box_grid()
     scene = s.scene(s.perspective_camera(12, 12), [s.medium(box, extinction=extinction, g=g)],
                     [s.environment()], spp=48, max_depth=500, rr_depth=500, seed=3)
@@ -57,7 +57,7 @@ def test_white_furnace_returns_the_environment(chromatic):
 @pytest.mark.parametrize("band", [(440, 450), (540, 550), (640, 650)])
 def test_beer_lambert_transmittance_per_wavelength(band):
     """Pure absorber between the camera and a uniform environment: Y = ∫ȳ e^{−σ(λ)d} / ∫ȳ per band."""
-    extinction = s.smooth_spectrum(1.5, 0.2)
+    extinction = s.smooth_ramp(1.5, 0.2)
     thickness = 1.0
     box = s.box_grid(cells=(8, 8, 8), size=(4.0, 4.0, thickness))
     scene = s.scene(s.ortho_camera(8, 8, scale=1.0), [s.medium(box, extinction=extinction, albedo=0.0)],
