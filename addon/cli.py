@@ -142,10 +142,10 @@ def render_blend(args):
 def _render_frame(scene, frame: int, args) -> str:
     import bpy
 
-    from . import dispatch, image_output
+    from . import dispatch, output
 
     export = export_context_scene(frame)
-    region = image_output.placement(scene)
+    region = output.placement(scene)
     settings = scene.spectral
     if settings.renderer == "CYCLES":
         result, warnings, how = _emulate(scene, export, args.spp)
@@ -154,11 +154,11 @@ def _render_frame(scene, frame: int, args) -> str:
         scheduler = settings.scheduler_address if args.scheduler is None else args.scheduler
         bar = None if args.quiet else ProgressBar()
         result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=bar, notice=bar and bar.notice)
-    denoised, skipped = image_output.denoising(settings)
+    denoised, skipped = output.denoising(settings)
     for warning in warnings + ([skipped] if skipped else []):
         print(f"warning: {warning}", file=sys.stderr)
-    images = image_output.passes(result.film, region, denoised)
-    outputs = [image_output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
+    images = output.passes(result.film, region, denoised)
+    outputs = [output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
     if args.png is not None:
         outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure))
     written = image_io.write_all(outputs)

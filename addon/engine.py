@@ -8,9 +8,9 @@ is honoured. The Render Result's Combined pass (linear Rec.709) is updated as of
 at the end the XYZ and XYZ Variance passes, which the compositor and multilayer EXR output see, are
 written too, and with Denoise on, Combined is replaced by the denoised image (addon/tracer/denoise.py;
 the updates during the render stay raw). While the kernel compiles (the first render), the stats line
-says so. Bad input is reported as an error and renders nothing, so Blender writes no output file. With
-the Cycles emulation chosen as renderer, F12 reports an error instead: Cycles cannot render from inside
-another engine's render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
+says so; the film goes to the Render Result through addon/output.py. Bad input is reported as an error
+and renders nothing, so Blender writes no output file. With the Cycles emulation chosen as renderer, F12
+reports an error instead: Cycles cannot render from inside another engine's render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
 CLI), a render exports its depsgraph for it and renders nothing. A preview renders Blender's preview
 scene as a render does, lit as `preview_scene` says, and reports nothing.
 
@@ -35,15 +35,13 @@ import dataclasses
 import bpy
 import gpu
 
-from . import dispatch, render_export
+from . import dispatch, output, render_export
 from .export.scene import export_scene
-from .image_output import denoising
-from .pixels import blender_rows, with_alpha
 from .preview import preview_scene
 from .props.render import ENGINE_ID
 from .tracer.denoise import available as denoise_available, denoised_rgb
 from .tracer.errors import SpectralError
-from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
+from .tracer.image_io import PASSES
 from .tracer.progress import Throttle, TimeLeft
 from .viewport_draw import ViewportImage
 from .viewport_render import ViewportRenderer, view_camera
@@ -163,24 +161,18 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     def _denoise(self, result, film, settings) -> None:
         """With Denoise on (not in previews), rewrite Combined with the denoised image (the XYZ and XYZ
         Variance passes stay as rendered). Runs after the raw result is written, so a failure loses nothing."""
-        denoised, skipped = denoising(settings)
+        denoised, skipped = output.denoising(settings)
         if skipped:
             self._report_unless_preview({"WARNING"}, skipped)
         if not denoised or self.is_preview or self.test_break():
             return
         self._show_stats("Denoising")
-        result.layers[0].passes[COMBINED].rect.foreach_set(blender_rows(with_alpha(denoised_rgb(film))).ravel())
+        output.render_combined(result, denoised_rgb(film))
         self.update_result(result)
 
     def _write(self, result, film, preview: bool = False) -> None:
-        """Film → Render Result: Combined, and unless this is a preview the XYZ and XYZ Variance passes
-        (the variance costs most to convert: 0.2–0.5 s at 1920×1080, time a cancel would wait). Pixels go
-        in with `foreach_set`: assigning `rect` took 7–10 s per pass at 1920×1080."""
-        passes = result.layers[0].passes
-        passes[COMBINED].rect.foreach_set(blender_rows(with_alpha(film.rgb())).ravel())
-        if not preview:
-            passes[XYZ].rect.foreach_set(blender_rows(film.xyz).ravel())
-            passes[VARIANCE].rect.foreach_set(blender_rows(film.variance).ravel())
+        """Film → Render Result (`output.render_result`), shown."""
+        output.render_result(result, film, preview)
         self.update_result(result)
 
 

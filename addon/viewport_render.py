@@ -11,7 +11,7 @@ pick up on the main thread. With Viewport Denoise on, the full view's images are
 quality, addon/tracer/denoise.py) once every pixel has a sample; the low-resolution steps stay raw. One
 thread renders every request in turn, so two kernels never run at once and a burst of edits renders only
 the last one. The thread never touches `bpy`; renders go through `dispatch` (this computer or the Dask
-farm), like F12's.
+farm), like F12's. Its pixels are laid out as Blender's (addon/output.py).
 """
 
 import dataclasses
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import dispatch
-from .pixels import blender_rows, with_alpha
+from .output import blender_rows, with_alpha
 from .tracer.denoise import denoised_rgb
 from .tracer.errors import SpectralError
 from .tracer.progress import Throttle

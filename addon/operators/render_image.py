@@ -10,7 +10,7 @@ failed one leaves the image and the file as they were.
 import bpy
 
 from ..cycles_emulation.job import EmulationJob, emulation_job
-from ..image_output import denoising, placement, write_outputs
+from ..output import denoising, placement, write_outputs
 from ..render_export import export_rendered
 from ..render_job import RenderJob
 from ..tracer.errors import SpectralError
@@ -35,7 +35,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     _warnings = ()
     _warnings_shown = 0
     _message = None
-    _region = None  # where the film goes in the image (image_output.placement), as exported
+    _region = None  # where the film goes in the image (output.placement), as exported
 
     def _start(self, context) -> RenderJob | EmulationJob | None:
         settings = context.scene.spectral
