@@ -32,7 +32,6 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
 
     _job = None
     _timer = None
-    _warnings = ()
     _warnings_shown = 0
     _message = None
     _region = None  # where the film goes in the image (output.placement), as exported
@@ -45,16 +44,16 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         except SpectralError as problem:
             self.report({"ERROR"}, f"Nothing rendered: {problem}")
             return None
-        self._warnings, self._warnings_shown = job.warnings, 0
+        self._warnings_shown = 0
         self.report({"INFO"}, f"Rendering with the {job.describe()}")
-        self._report_warnings()
+        self._report_warnings(job)
         return job
 
-    def _report_warnings(self) -> None:
-        """The warnings not shown yet: the emulation finds some while it renders (textured surfaces)."""
-        for warning in self._warnings[self._warnings_shown:]:
+    def _report_warnings(self, job: jobs.Job) -> None:
+        """The job's warnings not shown yet: the emulation finds some while it renders (textured surfaces)."""
+        for warning in job.warnings[self._warnings_shown:]:
             self.report({"WARNING"}, warning)
-        self._warnings_shown = len(self._warnings)
+        self._warnings_shown = len(job.warnings)
 
     def _show_message(self, context, message: str | None) -> None:
         """Show what the render waits for (the kernel compiling) in the status bar; None restores it."""
@@ -63,7 +62,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             self._message = message
 
     def _finish(self, context, job: jobs.Job) -> set:
-        self._report_warnings()
+        self._report_warnings(job)
         if job.error is not None:
             self.report({"ERROR"}, f"Render failed, nothing written: {job.error}")
             return {"CANCELLED"}
