@@ -4,6 +4,8 @@
         [--resolution WxH] [--percentage N] [--png OUT.png] [--spp N] [--scheduler ADDRESS] [--quiet]
     blender -c spectral_render FILE.blend --out OUT.exr [...]   (the same, with the extension installed)
 
+Each frame is exported as F12 renders it and rendered by the render job its Render settings choose (the
+tracer or the Cycles emulation, addon/jobs.py); its film goes to files through addon/output.py.
 Output paths take `#` frame-number placeholders (`out/frame_####.exr`), needed when rendering several
 frames. Every option is checked before the file is opened; each frame's files are written together
 (`image_io.write_all`) when that frame is done, so a failure at a later frame keeps the earlier ones.
@@ -142,41 +144,27 @@ def render_blend(args):
 def _render_frame(scene, frame: int, args) -> str:
     import bpy
 
-    from . import dispatch, image_output
+    from . import jobs, output
 
     export = export_context_scene(frame)
-    region = image_output.placement(scene)
-    settings = scene.spectral
-    if settings.renderer == "CYCLES":
-        result, warnings, how = _emulate(scene, export, args.spp)
-    else:
-        warnings, how = export.warnings, "tracer"
-        scheduler = settings.scheduler_address if args.scheduler is None else args.scheduler
-        bar = None if args.quiet else ProgressBar()
-        result = dispatch.run(export.scene, scheduler, spp=args.spp, progress=bar, notice=bar and bar.notice)
-    denoised, skipped = image_output.denoising(settings)
-    for warning in warnings + ([skipped] if skipped else []):
+    region = output.placement(scene)
+    job = jobs.render_job(scene, export, spp=args.spp, scheduler=args.scheduler)
+    bar = None if args.quiet else ProgressBar()
+    result = job.run(progress=bar, notice=bar and bar.notice)
+    if job.error is not None:
+        raise SpectralError(job.error)
+    denoised, skipped = output.denoising(scene.spectral)
+    for warning in job.warnings + ([skipped] if skipped else []):
         print(f"warning: {warning}", file=sys.stderr)
-    images = image_output.passes(result.film, region, denoised)
-    outputs = [image_output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
+    images = output.passes(result.film, region, denoised)
+    outputs = [output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
     if args.png is not None:
         outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure))
     written = image_io.write_all(outputs)
-    spp = settings.samples if args.spp is None else args.spp
+    spp = scene.spectral.samples if args.spp is None else args.spp
     height, width = images.alpha.shape
     return (f"wrote {', '.join(map(str, written))} ({width}×{height}, frame {frame}, "
-            f"{spp} spp, {how}, {result.seconds:.1f} s)")
-
-
-def _emulate(scene, export, spp):
-    """The Cycles emulation of the scene: (result, warnings, description)."""
-    from .cycles_emulation.job import emulation_job
-
-    job = emulation_job(scene, export, spp)
-    result = job.run()
-    if job.error is not None:
-        raise SpectralError(job.error)
-    return result, job.warnings, f"Cycles emulation: {job.describe()}, each made twice"
+            f"{spp} spp, {job.describe()}, {result.seconds:.1f} s)")
 
 
 def main(argv=None, prog="python -m addon.cli render") -> int:

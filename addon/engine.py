@@ -8,11 +8,12 @@ is honoured. The Render Result's Combined pass (linear Rec.709) is updated as of
 at the end the XYZ and XYZ Variance passes, which the compositor and multilayer EXR output see, are
 written too, and with Denoise on, Combined is replaced by the denoised image (addon/tracer/denoise.py;
 the updates during the render stay raw). While the kernel compiles (the first render), the stats line
-says so. Bad input is reported as an error and renders nothing, so Blender writes no output file. With
-the Cycles emulation chosen as renderer, F12 reports an error instead: Cycles cannot render from inside
-another engine's render (Blender crashes). While `render_export` asks for an export (Render to Image, Export Scene, the
-CLI), a render exports its depsgraph for it and renders nothing. A preview renders Blender's preview
-scene as a render does, lit as `preview_scene` says, and reports nothing.
+says so. The render is a render job (addon/jobs.py) and its film goes to the Render Result through
+addon/output.py. Bad input is reported as an error and renders nothing, so Blender writes no output
+file. A renderer that cannot run inside a render engine's render (the Cycles emulation: Blender crashes)
+is refused with an error (its job kind's `engine_refusal`). While `render_export` asks for an export
+(Render to Image, Export Scene, the CLI), a render exports its depsgraph for it and renders nothing. A
+preview renders Blender's preview scene as a render does, lit as `preview_scene` says, and reports nothing.
 
 While it is the engine, those of Blender's generic panels (offered for every engine) that change what it
 renders stay visible: camera, lights, volume file and grids, mesh data, output and colour management,
@@ -35,15 +36,13 @@ import dataclasses
 import bpy
 import gpu
 
-from . import dispatch, render_export
+from . import jobs, output, render_export
 from .export.scene import export_scene
-from .image_output import denoising
-from .pixels import blender_rows, with_alpha
 from .preview import preview_scene
 from .props.render import ENGINE_ID
 from .tracer.denoise import available as denoise_available, denoised_rgb
 from .tracer.errors import SpectralError
-from .tracer.image_io import COMBINED, PASSES, VARIANCE, XYZ
+from .tracer.image_io import PASSES
 from .tracer.progress import Throttle, TimeLeft
 from .viewport_draw import ViewportImage
 from .viewport_render import ViewportRenderer, view_camera
@@ -67,19 +66,23 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     def render(self, depsgraph):
         if render_export.capture(depsgraph):  # Render to Image, Export Scene, the CLI: export only
             return
-        settings = depsgraph.scene.original.spectral
-        if settings.renderer == "CYCLES":
-            self.report({"ERROR"}, "the Cycles emulation cannot run inside a render engine's render: use Render to "
-                        "Image (Spectral sidebar tab) or the command line, or choose the Tracer renderer")
+        original = depsgraph.scene.original
+        settings = original.spectral
+        refusal = jobs.kind(settings).engine_refusal
+        if refusal is not None:
+            self.report({"ERROR"}, refusal)
             return
         try:
             export = export_scene(depsgraph)
         except SpectralError as problem:
             self._report_unless_preview({"ERROR"}, str(problem))
             return
-        for warning in export.warnings:
+        if self.is_preview:
+            export = dataclasses.replace(export, scene=preview_scene(export.scene, settings.preview_samples))
+        job = jobs.render_job(original, export)
+        for warning in job.warnings:
             self._report_unless_preview({"WARNING"}, warning)
-        scene = preview_scene(export.scene, settings.preview_samples) if self.is_preview else export.scene
+        scene = export.scene
         camera = scene.camera  # with Render Region on, it sees the region: Blender crops or places it
         result = self.begin_result(0, 0, camera.width, camera.height)
         spp = scene.settings.spp
@@ -95,13 +98,16 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
                 with throttle.timed():
                     self._write(result, film, preview=True)
 
-        try:
-            rendered = dispatch.run(scene, settings.scheduler_address, progress=progress, cancel=self.test_break,
-                                    notice=self._show_stats)
-            self._write(result, rendered.film)
-            self._denoise(result, rendered.film, settings)
-        except SpectralError as problem:
-            self._report_unless_preview({"ERROR"}, str(problem))
+        job.run(progress=progress, notice=self._show_stats, cancel=self.test_break)
+        problem = job.error
+        if problem is None:
+            try:
+                self._write(result, job.result.film)
+                self._denoise(result, job.result.film, settings)
+            except SpectralError as error:  # Open Image Denoise failed
+                problem = str(error)
+        if problem is not None:
+            self._report_unless_preview({"ERROR"}, problem)
         self.end_result(result)
 
     def _report_unless_preview(self, kind: set, message: str) -> None:
@@ -121,8 +127,8 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             self.viewport_notes = []
             viewport.fail(str(problem))
             return
-        emulation = ["the viewport shows the tracer (Cycles emulation: Render to Image)"]
-        self.viewport_notes = export.warnings + (emulation if settings.renderer == "CYCLES" else [])
+        note = jobs.kind(settings).viewport_note
+        self.viewport_notes = export.warnings + ([] if note is None else [note])
         scene = export.scene
         scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spp=settings.preview_samples))
         viewport.render(scene, settings.scheduler_address, settings.viewport_denoise and denoise_available())
@@ -163,24 +169,18 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     def _denoise(self, result, film, settings) -> None:
         """With Denoise on (not in previews), rewrite Combined with the denoised image (the XYZ and XYZ
         Variance passes stay as rendered). Runs after the raw result is written, so a failure loses nothing."""
-        denoised, skipped = denoising(settings)
+        denoised, skipped = output.denoising(settings)
         if skipped:
             self._report_unless_preview({"WARNING"}, skipped)
         if not denoised or self.is_preview or self.test_break():
             return
         self._show_stats("Denoising")
-        result.layers[0].passes[COMBINED].rect.foreach_set(blender_rows(with_alpha(denoised_rgb(film))).ravel())
+        output.render_combined(result, denoised_rgb(film))
         self.update_result(result)
 
     def _write(self, result, film, preview: bool = False) -> None:
-        """Film → Render Result: Combined, and unless this is a preview the XYZ and XYZ Variance passes
-        (the variance costs most to convert: 0.2–0.5 s at 1920×1080, time a cancel would wait). Pixels go
-        in with `foreach_set`: assigning `rect` took 7–10 s per pass at 1920×1080."""
-        passes = result.layers[0].passes
-        passes[COMBINED].rect.foreach_set(blender_rows(with_alpha(film.rgb())).ravel())
-        if not preview:
-            passes[XYZ].rect.foreach_set(blender_rows(film.xyz).ravel())
-            passes[VARIANCE].rect.foreach_set(blender_rows(film.variance).ravel())
+        """Film → Render Result (`output.render_result`), shown."""
+        output.render_result(result, film, preview)
         self.update_result(result)
 
 

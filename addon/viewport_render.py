@@ -1,5 +1,5 @@
-"""The Rendered viewport's renders, without Blender: restarted on every change, refined progressively, on
-one background thread.
+"""The Rendered viewport's renders, away from Blender's data: restarted on every change, refined
+progressively, on one background thread.
 
 `ViewportRenderer.render(scene)` hands over a finished tracer Scene (exported on the main thread, with the
 view's camera and the Viewport Samples): the render in flight stops at its next unit of work and the new
@@ -11,7 +11,8 @@ pick up on the main thread. With Viewport Denoise on, the full view's images are
 quality, addon/tracer/denoise.py) once every pixel has a sample; the low-resolution steps stay raw. One
 thread renders every request in turn, so two kernels never run at once and a burst of edits renders only
 the last one. The thread never touches `bpy`; renders go through `dispatch` (this computer or the Dask
-farm), like F12's.
+farm), like F12's tracer job's; unlike a render job (addon/jobs.py), one renderer serves request after
+request, each cancelling the last. Its pixels are laid out as Blender's (addon/output.py).
 """
 
 import dataclasses
@@ -22,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import dispatch
-from .pixels import blender_rows, with_alpha
+from .output import blender_rows, with_alpha
 from .tracer.denoise import denoised_rgb
 from .tracer.errors import SpectralError
 from .tracer.progress import Throttle

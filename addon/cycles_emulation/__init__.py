@@ -5,5 +5,5 @@ Pure modules (no `bpy`): `bands` (band edges, XYZ weights, band means, packing),
 numbers of a tracer Scene), `composite` (renders → XYZ film). Blender modules: `shaders` (volume node
 trees, SVM or OSL), `surfaces` (RGB materials upsampled per band), `setup` (one render's settings, lights,
 World and materials), `fluids` (Volume objects standing in for fluid domains), `state` (temporary changes
-undone), `job` (the driver).
+undone), `job` (the driver: the emulation's render job, addon/jobs.py).
 """

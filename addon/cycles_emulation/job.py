@@ -1,12 +1,13 @@
 """The emulation driver: one Cycles render after another, each set up on the user's scene and undone, their
-R, G, B composited into an XYZ film.
+R, G, B composited into an XYZ film: a render job (addon/jobs.py) of the Cycles emulation.
 
 Each planned render (up to three bands, `parameters.plan`) is made twice, with seeds 2·seed and 2·seed + 1
 and half the samples each, so the film has a variance estimate (`composite`); Cycles keeps its scene
 between the two (persistent data), so the second costs no scene preparation (Cycles 5 spends seconds
 building the octree of a volume whose density comes through shader nodes). `step()` makes one planned
-render and can be called from a modal operator between UI events (Cycles runs on Blender's main thread;
-it cannot run inside another render engine's render); `run()` makes them all. Between steps the scene is
+render and can be called from a modal operator between UI events (Cycles runs on Blender's main thread,
+so nothing renders in the background; it cannot run inside another render engine's render, so F12 and
+the Rendered viewport cannot run it); `run()` makes them all. Between steps the scene is
 the user's own, and every step restores it even when Cycles fails. Cycles' images and the fluid domains'
 grids (`fluids`, written once) go to a temporary folder, removed when the job ends.
 """
@@ -18,6 +19,8 @@ from pathlib import Path
 import bpy
 import numpy as np
 
+from ..export.scene import Export
+from ..jobs import Job
 from ..tracer import image_io
 from ..tracer.errors import SpectralError
 from ..tracer.render import RenderResult
@@ -29,11 +32,16 @@ from .parameters import plan as make_plan
 from .state import Borrowed
 
 
-class EmulationJob:
+class EmulationJob(Job):
     """`band_count` equal bands, or (None) the bands `band_plan` chooses within `max_renders` Cycles renders."""
+
+    engine_refusal = ("the Cycles emulation cannot run inside a render engine's render: use Render to Image "
+                      "(Spectral sidebar tab) or the command line, or choose the Tracer renderer")
+    viewport_note = "the viewport shows the tracer (Cycles emulation: Render to Image)"
 
     def __init__(self, scene, tracer_scene: Scene, warnings=(), *, band_count: int | None = None,
                  max_renders: int = DEFAULT_MAX_RENDERS, shader: str = "SVM", spp: int | None = None):
+        super().__init__(warnings)
         self.scene = scene
         self.band_plan = None if band_count is not None else plan_bands(tracer_scene, max_renders=max_renders)
         self.plan = make_plan(tracer_scene, band_count if self.band_plan is None else self.band_plan.bands)
@@ -44,7 +52,7 @@ class EmulationJob:
         settings = tracer_scene.settings
         self.samples = max(1, (settings.spp if spp is None else int(spp)) // 2)
         self.seed, self.max_bounces = settings.seed, settings.max_depth
-        self.warnings = list(warnings) + list(self.plan.warnings)
+        self.warnings += self.plan.warnings
         if self.band_plan is not None and self.band_plan.warning:
             self.warnings.append(self.band_plan.warning)
         self.film = CompositeFilm(tracer_scene.camera.width, tracer_scene.camera.height)
@@ -52,8 +60,15 @@ class EmulationJob:
         self._total = len(self._queue)
         self._cancel = False
         self._seconds = 0.0
-        self.error = None
-        self.result = None
+
+    @classmethod
+    def for_export(cls, scene, export: Export, *, spp: int | None = None,
+                   scheduler: str | None = None) -> "EmulationJob":
+        """With the Render settings' bands and shader (Cycles renders here: `scheduler` is not asked)."""
+        settings = scene.spectral
+        band_count = settings.emulation_bands if settings.emulation_band_mode == "FIXED" else None
+        return cls(scene, export.scene, export.warnings, band_count=band_count,
+                   max_renders=settings.emulation_max_renders, shader=settings.emulation_shader, spp=spp)
 
     @property
     def cycles_renders(self) -> int:
@@ -61,10 +76,12 @@ class EmulationJob:
         return len(self.plan.renders)
 
     def describe(self) -> str:
-        """The bands and what they cost, for the user (with the estimated colour error when planned)."""
+        """The bands and what they cost (with the estimated colour error when planned)."""
         if self.band_plan is not None:
-            return self.band_plan.summary()
-        return f"{self.plan.bands.count} equal bands in {self.cycles_renders} Cycles render(s)"
+            bands = self.band_plan.summary()
+        else:
+            bands = f"{self.plan.bands.count} equal bands in {self.cycles_renders} Cycles render(s)"
+        return f"Cycles emulation: {bands}, each made twice"
 
     @property
     def fraction(self) -> float:
@@ -74,15 +91,8 @@ class EmulationJob:
     def running(self) -> bool:
         return self.result is None and self.error is None
 
-    @property
-    def succeeded(self) -> bool:
-        return self.error is None and self.result is not None and not self.result.cancelled
-
     def cancel(self) -> None:
         self._cancel = True
-
-    def start(self) -> None:
-        """Nothing to start: `step()` does the work on the main thread (what a modal operator calls)."""
 
     def step(self) -> None:
         """Make the next Cycles render, or finish (cancelled, failed or done)."""
@@ -104,12 +114,15 @@ class EmulationJob:
             self._seconds += time.perf_counter() - start
         self.film.add(first, second, self.plan.weights[list(members)])
 
-    def run(self, cancel=None) -> RenderResult | None:
-        """All renders in this thread; `cancel()` is asked between them."""
+    def run(self, progress=None, notice=None, cancel=None) -> RenderResult | None:
+        """All renders in this thread; `progress` follows each, `cancel()` is asked between them (the
+        emulation never waits: `notice` is not called)."""
         while self.running:
             if cancel is not None and cancel():
                 self.cancel()
             self.step()
+            if progress is not None and self.running:
+                progress(self.film, self.fraction)
         return self.result
 
     def _render(self, members) -> tuple[np.ndarray, np.ndarray]:
@@ -145,11 +158,3 @@ class EmulationJob:
 
     def _bands(self, members) -> str:
         return ", ".join(self.plan.bands.label(k) for k in members)
-
-
-def emulation_job(scene, export, spp: int | None = None) -> EmulationJob:
-    """The emulation of `export` (the scene's `export.scene.Export`) with its Render settings (bands, shader)."""
-    settings = scene.spectral
-    band_count = settings.emulation_bands if settings.emulation_band_mode == "FIXED" else None
-    return EmulationJob(scene, export.scene, export.warnings, band_count=band_count,
-                        max_renders=settings.emulation_max_renders, shader=settings.emulation_shader, spp=spp)

@@ -1,18 +1,18 @@
 """The "Render to Image" operator: renders the scene into a float Image (and optionally a multilayer
 EXR) without the Render window.
 
-Run from the UI (invoke) it renders on a background thread (the Cycles emulation: one Cycles render per
-timer tick on the main thread), shows progress and stops on Esc; run from a script (execute) it renders
-in place. Only a finished render writes anything: a cancelled or
-failed one leaves the image and the file as they were.
+The render is the render job the Render settings choose (addon/jobs.py). Run from the UI (invoke) it
+renders in the background (the job starts, then steps on each timer tick: the Cycles emulation makes one
+Cycles render per tick on the main thread), shows progress and stops on Esc; run from a script (execute)
+it renders in place. The film goes to the image and the file through addon/output.py. Only a finished
+render writes anything: a cancelled or failed one leaves the image and the file as they were.
 """
 
 import bpy
 
-from ..cycles_emulation.job import EmulationJob, emulation_job
-from ..image_output import denoising, placement, write_outputs
+from .. import jobs
+from ..output import denoising, placement, write_outputs
 from ..render_export import export_rendered
-from ..render_job import RenderJob
 from ..tracer.errors import SpectralError
 
 TIMER_SECONDS = 0.25
@@ -32,32 +32,28 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
 
     _job = None
     _timer = None
-    _warnings = ()
     _warnings_shown = 0
     _message = None
-    _region = None  # where the film goes in the image (image_output.placement), as exported
+    _region = None  # where the film goes in the image (output.placement), as exported
 
-    def _start(self, context) -> RenderJob | EmulationJob | None:
-        settings = context.scene.spectral
+    def _start(self, context) -> jobs.Job | None:
         try:
             export = export_rendered(context.scene, context.view_layer)
             self._region = placement(context.scene)
-            job = (emulation_job(context.scene, export) if settings.renderer == "CYCLES"
-                   else RenderJob(export.scene, settings.scheduler_address))
+            job = jobs.render_job(context.scene, export)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Nothing rendered: {problem}")
             return None
-        self._warnings, self._warnings_shown = getattr(job, "warnings", export.warnings), 0
-        if isinstance(job, EmulationJob):
-            self.report({"INFO"}, f"Cycles emulation: {job.describe()}")
-        self._report_warnings()
+        self._warnings_shown = 0
+        self.report({"INFO"}, f"Rendering with the {job.describe()}")
+        self._report_warnings(job)
         return job
 
-    def _report_warnings(self) -> None:
-        """The warnings not shown yet: the emulation finds some while it renders (textured surfaces)."""
-        for warning in self._warnings[self._warnings_shown:]:
+    def _report_warnings(self, job: jobs.Job) -> None:
+        """The job's warnings not shown yet: the emulation finds some while it renders (textured surfaces)."""
+        for warning in job.warnings[self._warnings_shown:]:
             self.report({"WARNING"}, warning)
-        self._warnings_shown = len(self._warnings)
+        self._warnings_shown = len(job.warnings)
 
     def _show_message(self, context, message: str | None) -> None:
         """Show what the render waits for (the kernel compiling) in the status bar; None restores it."""
@@ -65,8 +61,8 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             context.workspace.status_text_set(message)
             self._message = message
 
-    def _finish(self, context, job: RenderJob) -> set:
-        self._report_warnings()
+    def _finish(self, context, job: jobs.Job) -> set:
+        self._report_warnings(job)
         if job.error is not None:
             self.report({"ERROR"}, f"Render failed, nothing written: {job.error}")
             return {"CANCELLED"}
@@ -111,7 +107,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             return {"PASS_THROUGH"}
         self._job.step()
         context.window_manager.progress_update(self._job.fraction)
-        self._show_message(context, getattr(self._job, "message", None))  # the emulation's job has none
+        self._show_message(context, self._job.message)
         if self._job.running:
             return {"RUNNING_MODAL"}
         context.window_manager.event_timer_remove(self._timer)

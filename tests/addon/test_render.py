@@ -9,7 +9,7 @@ import pytest
 
 from addon import cli
 from addon.export.scene import export_scene
-from addon.render_job import RenderJob
+from addon.jobs import TracerJob
 from addon.tracer import image_io
 from addon.tracer.errors import SpectralError
 from addon.tracer.render import render
@@ -162,7 +162,7 @@ def test_failed_render_to_image_touches_nothing(registered, tmp_path):
 
 def test_cancelled_job_leaves_no_result(registered, tmp_path):
     basic_scene(tmp_path)
-    job = RenderJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
+    job = TracerJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
     job.cancel()
     job.start()
     job._thread.join(timeout=300)
@@ -171,7 +171,7 @@ def test_cancelled_job_leaves_no_result(registered, tmp_path):
 
 def test_job_reports_progress_from_its_thread(registered, tmp_path):
     basic_scene(tmp_path)
-    job = RenderJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
+    job = TracerJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
     job.start()
     job._thread.join(timeout=300)
     assert job.succeeded and job.fraction == 1.0
@@ -192,10 +192,9 @@ def compiling(monkeypatch):
 
 def test_job_says_when_the_kernel_compiles_until_rendering_starts(registered, tmp_path, compiling, monkeypatch):
     basic_scene(tmp_path)
-    job = RenderJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
+    job = TracerJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
     seen = []
-    monkeypatch.setattr(job, "_notice", lambda text: (RenderJob._notice(job, text), seen.append(job.message)))
-    job.run()
+    job.run(notice=lambda text: seen.append(job.message))
     assert len(seen) == 1 and seen[0].startswith("Compiling the kernel (first render only, about ")
     assert job.message is None and job.succeeded
 

@@ -7,8 +7,8 @@ import pytest
 
 import addon.cli
 import addon.engine
+import addon.jobs
 import addon.operators.emulation
-import addon.operators.render_image
 from addon.props.render import ENGINE_ID
 from addon.render_export import export_rendered
 from addon.tracer.errors import SpectralError
@@ -72,16 +72,12 @@ def test_f12_renders_by_render_visibility(registered, tmp_path, monkeypatch):
 def _render_to_image(monkeypatch, tmp_path):
     exported = []
 
-    class Recorded:
-        error = "recorded, not rendered"
+    class Recorded(addon.jobs.TracerJob):
+        def run(self, progress=None, notice=None, cancel=None):
+            exported.append(self.scene)
+            self.error = "recorded, not rendered"
 
-        def __init__(self, scene, _scheduler):
-            exported.append(scene)
-
-        def run(self):
-            pass
-
-    monkeypatch.setattr(addon.operators.render_image, "RenderJob", Recorded)
+    monkeypatch.setattr(addon.jobs, "TracerJob", Recorded)
     with contextlib.suppress(RuntimeError):
         bpy.ops.spectral.render_image()
     return exported[0]

@@ -15,7 +15,7 @@ from addon import dispatch
 from addon.engine import SpectralVolumeEngine, region_camera
 from addon.export.camera import export_camera
 from addon.export.scene import export_scene
-from addon.pixels import blender_rows, with_alpha
+from addon.output import blender_rows, with_alpha
 from addon.tracer.errors import SpectralError
 from addon.tracer.film import Film
 from addon.tracer.lowering import camera_extent
