@@ -124,14 +124,3 @@ def sync_all(_=None) -> None:
 CLASSES = ()
 HANDLERS = ((bpy.app.handlers.depsgraph_update_post, sync_updated), (bpy.app.handlers.load_post, sync_all))
 
-
-def register_extras():
-    for handlers, handler in HANDLERS:
-        if handler not in handlers:
-            handlers.append(handler)
-
-
-def unregister_extras():
-    for handlers, handler in HANDLERS:
-        if handler in handlers:
-            handlers.remove(handler)

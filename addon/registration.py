@@ -1,13 +1,14 @@
 """Registers and unregisters every Blender class the add-on defines.
 
 Each Blender-facing module lists its classes in a module-level `CLASSES` tuple (in dependency
-order: property groups before the things that point at them). This module walks those lists,
-so adding a class means adding it to its module's list, nowhere else.
+order: property groups before the things that point at them), and may list application handlers as
+(handler list, function) pairs in `HANDLERS`. This module walks those lists, so adding a class or a
+handler means adding it to its module's list, nowhere else.
 """
 
 import bpy
 
-from . import cli, engine, material_preview
+from . import cli, engine, kernel_warmup, material_preview
 from .operators import albedo_levels
 from .operators import emulation as emulation_operators
 from .operators import export as export_operators
@@ -18,15 +19,18 @@ from .operators import spectrum as spectrum_operators
 from .props import attach, curves, light, material, render, spectrum
 from .ui import lighting, material as material_ui, presets as preset_ui, render as render_ui, sidebar
 
-MODULES = (curves, spectrum, material, light, render, attach, engine, material_preview, spectrum_operators, preset_operators,
-           albedo_levels, export_operators, import_operators, emulation_operators, render_image, preset_ui,
-           material_ui, lighting, render_ui, sidebar, cli)
+MODULES = (curves, spectrum, material, light, render, attach, engine, material_preview, kernel_warmup,
+           spectrum_operators, preset_operators, albedo_levels, export_operators, import_operators,
+           emulation_operators, render_image, preset_ui, material_ui, lighting, render_ui, sidebar, cli)
 
 
 def register():
     for module in MODULES:
         for cls in module.CLASSES:
             bpy.utils.register_class(cls)
+        for handlers, handler in getattr(module, "HANDLERS", ()):
+            if handler not in handlers:
+                handlers.append(handler)
         if hasattr(module, "register_extras"):
             module.register_extras()
 
@@ -35,5 +39,8 @@ def unregister():
     for module in reversed(MODULES):
         if hasattr(module, "unregister_extras"):
             module.unregister_extras()
+        for handlers, handler in getattr(module, "HANDLERS", ()):
+            if handler in handlers:
+                handlers.remove(handler)
         for cls in reversed(module.CLASSES):
             bpy.utils.unregister_class(cls)

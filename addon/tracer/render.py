@@ -165,7 +165,7 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     film = Film(camera.width, camera.height, len(bands))
     total = camera.width * camera.height * spp * len(bands)
     done = 0
-    cancelled = backend == "numba" and not _kernel_ready(module, bands[0], seed, cancel, notice)
+    cancelled = backend == "numba" and not kernel_ready(module, bands[0], seed, cancel, notice)
     tiler = Tiler(camera.width, camera.height, unit_seconds)
     for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler):
         if cancel is not None and cancel():
@@ -193,13 +193,18 @@ def _units(spp: int, bands: int, tiler: Tiler):
                 yield band, (begin, begin + size), tile
 
 
-def _kernel_ready(module, kernel_scene: KernelScene, seed: int, cancel, notice) -> bool:
+def kernel_ready(module, kernel_scene: KernelScene, seed: int, cancel, notice) -> bool:
     """Compile the Numba kernel for the scene's argument types (or load it from its cache), cancellably;
-    False if cancelled. Compiling without running leaves nothing to run in the background after a cancel
-    (Numba's workqueue threading layer aborts when two threads launch kernels at once)."""
+    False if cancelled. A compile already running in the background (`background_compile`) is waited for,
+    then its cache loaded. Compiling without running leaves nothing to run in the background after a
+    cancel (Numba's workqueue threading layer aborts when two threads launch kernels at once)."""
     import numba
 
+    from . import background_compile
     from .kernels import numba_cache
+
+    if not background_compile.wait(cancel, notice):
+        return False
 
     arguments = _tile_arguments(kernel_scene, 0, (0, 1), (0, 0, 1, 1), seed)
     signature = tuple(numba.typeof(argument) for argument in arguments)

@@ -47,6 +47,11 @@ INSTALL_SCRIPT = textwrap.dedent(
     site = os.path.join(os.environ["BLENDER_USER_RESOURCES"], "extensions", ".local", "lib",
                         "python%d.%d" % sys.version_info[:2], "site-packages")
     assert {"numba", "llvmlite", "colour", "scipy", "dask", "distributed"} <= set(os.listdir(site)), os.listdir(site)
+    import importlib, subprocess
+    background = importlib.import_module(module + ".addon.tracer.background_compile")
+    child = subprocess.run(background.child_command("describe"), env=background.child_environment(),
+                           capture_output=True, text=True, timeout=120)
+    assert child.stdout.startswith(module + ".addon.tracer "), child.stdout + child.stderr  # its own cache key
     bpy.ops.preferences.addon_disable(module=module)
     assert not hasattr(bpy.types.Scene, "spectral"), "scene settings left after disable"
     assert not hasattr(bpy.types, "SPECTRAL_PT_sidebar"), "panel left after disable"
