@@ -50,10 +50,11 @@ _process: subprocess.Popen | None = None
 
 
 def start() -> bool:
-    """Start compiling the kernel in a separate process, unless one was started already (by this process)
-    or the environment variable DISABLE_VARIABLE is set. Returns whether a process was started."""
+    """Start compiling the kernel in a separate process, unless one was started already (by this process),
+    this process has the kernel already, or the environment variable DISABLE_VARIABLE is set. Returns
+    whether a process was started."""
     global _process
-    if os.environ.get(DISABLE_VARIABLE):
+    if os.environ.get(DISABLE_VARIABLE) or _kernel_loaded():
         return False
     with _lock:
         if _process is not None:
@@ -62,6 +63,12 @@ def start() -> bool:
                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                     creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0))  # no console on Windows
         return True
+
+
+def _kernel_loaded() -> bool:
+    """Whether this process has compiled or loaded the Numba kernel already (without importing it)."""
+    kernel = sys.modules.get(f"{PACKAGE}.kernels.numba_backend")
+    return kernel is not None and bool(kernel.render_tile.overloads)
 
 
 def child_command(function: str) -> list[str]:

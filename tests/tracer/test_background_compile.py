@@ -31,6 +31,7 @@ def test_the_child_imports_the_tracer_under_the_parents_package_name(tmp_path):
 
 def test_a_background_compile_fills_this_process_cache_once(monkeypatch):
     monkeypatch.setattr(background_compile, "_process", None)
+    monkeypatch.setattr(background_compile, "_kernel_loaded", lambda: False)  # as if no render ran before
     monkeypatch.delenv(background_compile.DISABLE_VARIABLE, raising=False)
     assert background_compile.start()
     assert not background_compile.start()  # one per process
@@ -45,6 +46,16 @@ def test_a_background_compile_fills_this_process_cache_once(monkeypatch):
 def test_no_background_compile_when_switched_off(monkeypatch):
     monkeypatch.setattr(background_compile, "_process", None)
     monkeypatch.setenv(background_compile.DISABLE_VARIABLE, "1")
+    assert not background_compile.start() and not background_compile.started()
+
+
+def test_no_background_compile_once_this_process_has_the_kernel(monkeypatch):
+    from addon.tracer import builders as b
+    from addon.tracer.render import render
+
+    monkeypatch.setattr(background_compile, "_process", None)
+    monkeypatch.delenv(background_compile.DISABLE_VARIABLE, raising=False)
+    render(b.scene(b.perspective((0, -4, 0), (0, 0, 0), 2, 2, 40), [], [b.environment()], spp=1))
     assert not background_compile.start() and not background_compile.started()
 
 
