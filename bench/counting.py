@@ -1,11 +1,12 @@
 """An instrumented copy of the Numba kernel that counts density look-ups, for `bench/throughput.py`.
 
 The tracer's kernel has no counters (counting there would slow every render), so this module builds a
-copy of `addon/tracer/kernels/numba_backend.py` with counters wrapped around three of its functions,
-and runs the same paths (same scene, seed and sample indices) through it:
+copy of `addon/tracer/kernels/numba_backend.py` with counters wrapped around three of the functions it
+calls, and runs the same paths (same scene, seed and sample indices) through it:
 
-- `_density`: one call is one density look-up (a trilinear interpolation, 8 voxel reads); the kernel
-  calls it once per medium at every tentative collision, on camera paths and on shadow rays;
+- `density` (`kernels/media.py`): one call is one density look-up (a trilinear interpolation, 8 voxel
+  reads); the kernel calls it once per medium at every tentative collision, on camera paths and on
+  shadow rays;
 - `_transmittance`: one call is one shadow ray (next-event estimation);
 - `_tracker_advance`: one call is one step of the majorant-grid DDA.
 
@@ -32,13 +33,13 @@ _WRAPPERS = '''
 # ---- bench/counting.py: per-thread counters around three functions (resolved when first compiled)
 from numba import get_thread_id as _bench_thread_id
 
-_density_uncounted = _density
+_density_uncounted = density
 _transmittance_uncounted = _transmittance
 _tracker_advance_uncounted = _tracker_advance
 
 
 @njit
-def _density(ks, m, px, py, pz):
+def density(ks, m, px, py, pz):
     ks.bench_counters[_bench_thread_id() * 8 + 0] += 1
     return _density_uncounted(ks, m, px, py, pz)
 
@@ -56,15 +57,16 @@ def _tracker_advance(ks, tracker, t_end):
 '''
 
 CountingScene = namedtuple("CountingScene", KernelScene._fields + ("bench_counters",))
-# The definition lines the wrappers mirror: a changed signature refuses the copy instead of failing to compile.
-_CHECKED = ("def _density(ks, m, px, py, pz):",
+# The lines the wrappers mirror (the call of the shared `density`, the definitions of the others): a changed
+# signature refuses the copy instead of failing to compile.
+_CHECKED = ("rho = density(ks, m, px, py, pz) * ks.density_scale[m]",
             "def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker):",
             "def _tracker_advance(ks, tracker, t_end):")
 
 
 def counting_backend(folder: Path):
     """The instrumented kernel module (see the module docstring)."""
-    # Replacing each definition line by itself checks that the three functions still exist.
+    # Replacing each line by itself checks that the three functions are still there.
     return kernel_copy("counting", folder, [(name, name) for name in _CHECKED], _WRAPPERS)
 
 

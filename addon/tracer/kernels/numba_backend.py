@@ -23,11 +23,14 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
 
 Structure: `render_tile` runs runs of pixels in parallel; `_render_pixels` makes a run's buffers once
 (each allocation updates Numba's global counters atomically) and `_render_samples` runs a pixel's samples, each through
-the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `_camera_ray`, then transport
+the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `geometry.camera_ray`, then transport
 (`_trace`: `_transport` with `_free_flight`, `_offer_fluorescence`, `_escape`, `_next_event`, `_sample_phase`,
 `_survives_roulette`; then `_start_fluorescent_branch` for each fluorescent sub-path),
-then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`). Every
-function below `_render_samples` is inlined into it, and the kernel scene's arrays are borrowed
+then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`). The
+physics at a point (look-ups, coefficients, phase functions, lights, free paths) is the shared
+arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module holds the path's loops
+and state. Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
+scene's arrays are borrowed
 (`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
 reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call.
 """
@@ -42,11 +45,10 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from ..binned import linear_over_binned, pdf_binned, sample_binned
-from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
-from ..planck import planck_radiance
+from ..phase import INV_FOUR_PI, hg_sample_cos, rayleigh_sample_cos, sample_direction
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
+from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
-    CAMERA_PERSPECTIVE,
     LIGHT_ENVIRONMENT,
     LIGHT_SKY,
     LIGHT_SPOT,
@@ -55,6 +57,18 @@ from .layout import (
     PHASE_RAYLEIGH,
     SHADOW_ROULETTE_BELOW,
     SHADOW_ROULETTE_STOP,
+)
+from .light_sampling import choose_light
+from .lookups import on_grid, table_at
+from .media import (
+    albedo,
+    collision_coefficients,
+    density,
+    free_path,
+    null_fraction,
+    phase_pdf,
+    temperature,
+    thermal_emission,
 )
 from .numba_cache import cached
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
@@ -107,37 +121,6 @@ def _next(stream):
 
 
 @jit(inline="always")
-def _table(row, lam):
-    """Linear interpolation of a per-nanometre table at wavelength `lam` (0 outside the grid)."""
-    position = lam - 250.0
-    if position < 0.0 or position > row.shape[0] - 1:
-        return 0.0
-    index = min(int(position), row.shape[0] - 2)
-    frac = position - index
-    return row[index] * (1.0 - frac) + row[index + 1] * frac
-
-
-@jit(inline="always")
-def _transform_point(m, x, y, z):
-    return (m[0, 0] * x + m[0, 1] * y + m[0, 2] * z + m[0, 3],
-            m[1, 0] * x + m[1, 1] * y + m[1, 2] * z + m[1, 3],
-            m[2, 0] * x + m[2, 1] * y + m[2, 2] * z + m[2, 3])
-
-
-@jit(inline="always")
-def _transform_vector(m, x, y, z):
-    return (m[0, 0] * x + m[0, 1] * y + m[0, 2] * z,
-            m[1, 0] * x + m[1, 1] * y + m[1, 2] * z,
-            m[2, 0] * x + m[2, 1] * y + m[2, 2] * z)
-
-
-@jit(inline="always")
-def _normalize(x, y, z):
-    inv = 1.0 / math.sqrt(x * x + y * y + z * z)
-    return x * inv, y * inv, z * inv
-
-
-@jit(inline="always")
 def _mean(values, n):
     total = 0.0
     for i in range(n):
@@ -148,69 +131,17 @@ def _mean(values, n):
 # ----------------------------------------------------------------------------- volume look-ups
 
 @jit(inline="always")
-def _trilinear(data, offset, nx, ny, nz, x, y, z):
-    """Trilinear interpolation of cell-centre samples at index-space point (x, y, z), zero outside."""
-    fx, fy, fz = math.floor(x), math.floor(y), math.floor(z)
-    ix, iy, iz = int(fx), int(fy), int(fz)
-    tx, ty, tz = x - fx, y - fy, z - fz
-    total = 0.0
-    for corner in range(8):
-        cx = ix + (corner & 1)
-        cy = iy + ((corner >> 1) & 1)
-        cz = iz + ((corner >> 2) & 1)
-        if cx < 0 or cy < 0 or cz < 0 or cx >= nx or cy >= ny or cz >= nz:
-            continue
-        wx = tx if corner & 1 else 1.0 - tx
-        wy = ty if (corner >> 1) & 1 else 1.0 - ty
-        wz = tz if (corner >> 2) & 1 else 1.0 - tz
-        total += wx * wy * wz * data[offset + (cx * ny + cy) * nz + cz]
-    return total
-
-
-@jit(inline="always")
-def _density(ks, m, px, py, pz):
-    qx, qy, qz = _transform_point(ks.world_to_padded[m], px, py, pz)
-    shape = ks.density_shape[m]
-    return _trilinear(ks.density_data, ks.density_offset[m], shape[0], shape[1], shape[2],
-                      qx - 1.0, qy - 1.0, qz - 1.0)
-
-
-@jit(inline="always")
-def _temperature(ks, m, px, py, pz):
-    qx, qy, qz = _transform_point(ks.temperature_world_to_padded[m], px, py, pz)
-    shape = ks.temperature_shape[m]
-    raw = _trilinear(ks.temperature_data, ks.temperature_offset[m], shape[0], shape[1], shape[2],
-                     qx - 1.0, qy - 1.0, qz - 1.0)
-    return raw * ks.temperature_map[m, 0] + ks.temperature_map[m, 1]
-
-
-@jit(inline="always")
-def _albedo(ks, m, density, lam):
-    count = ks.albedo_count[m]
-    levels = ks.albedo_densities[m]
-    if count == 1 or density <= levels[0]:
-        return _table(ks.albedo_table[m, 0], lam)
-    if density >= levels[count - 1]:
-        return _table(ks.albedo_table[m, count - 1], lam)
-    upper = 1
-    while levels[upper] < density:
-        upper += 1
-    t = (density - levels[upper - 1]) / (levels[upper] - levels[upper - 1])
-    return (1.0 - t) * _table(ks.albedo_table[m, upper - 1], lam) + t * _table(ks.albedo_table[m, upper], lam)
-
-
-@jit(inline="always")
 def _fill_spectral_cache(ks, lams, n, spec):
     """Tabulated spectra of every medium at the path's current wavelengths (looked up once per path
     and after a fluorescent wavelength change, instead of at every collision)."""
     for m in range(ks.density_scale.shape[0]):
         for i in range(n):
-            lam = lams[i]
-            spec[m, SPEC_EXTINCTION, i] = _table(ks.extinction[m], lam)
-            spec[m, SPEC_EXCITATION, i] = _table(ks.excitation[m], lam)
-            spec[m, SPEC_EMISSION_PDF, i] = _table(ks.emission_pdf[m], lam)
-            spec[m, SPEC_ANISOTROPY, i] = _table(ks.anisotropy[m], lam)
-            spec[m, SPEC_ALBEDO, i] = _table(ks.albedo_table[m, 0], lam)
+            at = on_grid(lams[i])
+            spec[m, SPEC_EXTINCTION, i] = table_at(ks.extinction, m, at)
+            spec[m, SPEC_EXCITATION, i] = table_at(ks.excitation, m, at)
+            spec[m, SPEC_EMISSION_PDF, i] = table_at(ks.emission_pdf, m, at)
+            spec[m, SPEC_ANISOTROPY, i] = table_at(ks.anisotropy, m, at)
+            spec[m, SPEC_ALBEDO, i] = table_at(ks.albedo_table[m], 0, at)
 
 
 @jit(inline="always")
@@ -225,26 +156,25 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
         emission[i] = 0.0
     dye[0] = 0.0
     for m in range(ks.density_scale.shape[0]):
-        rho = _density(ks, m, px, py, pz) * ks.density_scale[m]
+        rho = density(ks, m, px, py, pz) * ks.density_scale[m]
         if rho > 0.0 and ks.fluor_strength[m] > 0.0:
             dye[0] += rho * ks.excitation_mean[m]
-        temperature = _temperature(ks, m, px, py, pz) if ks.temperature_offset[m] >= 0 and rho > 0 else 0.0
+        kelvin = temperature(ks, m, px, py, pz) if ks.temperature_offset[m] >= 0 and rho > 0 else 0.0
         for i in range(n):
             if rho <= 0.0:
                 medium_s[m, i] = 0.0
                 medium_fl[m, i] = 0.0
                 continue
-            sigma_t = rho * spec[m, SPEC_EXTINCTION, i]
-            albedo = (spec[m, SPEC_ALBEDO, i] if ks.albedo_count[m] == 1
-                      else _albedo(ks, m, rho / ks.density_scale[m], lams[i]))
-            scattering = sigma_t * albedo
-            plain_absorption = sigma_t - scattering
+            albedo_value = (spec[m, SPEC_ALBEDO, i] if ks.albedo_count[m] == 1
+                            else albedo(ks, m, rho / ks.density_scale[m], on_grid(lams[i])))
+            scattering, absorption, plain_absorption, medium_fl[m, i] = collision_coefficients(
+                rho, spec[m, SPEC_EXTINCTION, i], albedo_value, spec[m, SPEC_EXCITATION, i], ks.fluor_strength[m],
+                spec[m, SPEC_EMISSION_PDF, i])
             medium_s[m, i] = scattering
-            medium_fl[m, i] = rho * ks.fluor_strength[m] * spec[m, SPEC_EMISSION_PDF, i]
             sigma_s[i] += scattering
-            sigma_a[i] += plain_absorption + rho * spec[m, SPEC_EXCITATION, i]
-            if temperature > 0.0:
-                emission[i] += plain_absorption * ks.temperature_map[m, 2] * planck_radiance(lams[i], temperature)
+            sigma_a[i] += absorption
+            if kelvin > 0.0:  # Planck's law is costly: skipped where it is 0
+                emission[i] += thermal_emission(plain_absorption, ks.temperature_map[m, 2], lams[i], kelvin)
 
 
 # ----------------------------------------------------------------------------- majorant tracking
@@ -263,8 +193,8 @@ def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, tracker):
     state_i, state_f = tracker.state_i, tracker.state_f
     for m in range(ks.density_scale.shape[0]):
         w2p = ks.world_to_padded[m]
-        lox, loy, loz = _transform_point(w2p, ox, oy, oz)
-        ldx, ldy, ldz = _transform_vector(w2p, dx, dy, dz)
+        lox, loy, loz = transform_point(w2p, ox, oy, oz)
+        ldx, ldy, ldz = transform_vector(w2p, dx, dy, dz)
         block = ks.majorant_block[m]
         shape = ks.majorant_shape[m]
         t0, t1 = t_min, t_max
@@ -374,7 +304,7 @@ def _tentative_collision(ks, stream, tracker, t):
         if t_end == INF:
             return INF, 0.0
         if sigma_bar > 0.0:
-            step = -math.log(1.0 - _next(stream)) / sigma_bar
+            step = free_path(_next(stream), sigma_bar)
             if t + step < t_end:
                 return t + step, sigma_bar
         t = t_end
@@ -382,13 +312,6 @@ def _tentative_collision(ks, stream, tracker, t):
 
 
 # ----------------------------------------------------------------------------- phase functions
-
-@jit(inline="always")
-def _phase_pdf(ks, m, g, cos_theta):
-    if ks.phase_kind[m] == PHASE_RAYLEIGH:
-        return rayleigh_pdf(cos_theta)
-    return hg_pdf(g, cos_theta)
-
 
 @jit(inline="always")
 def _mixture_phase(ks, medium_s, spec, n, cos_theta, out):
@@ -399,7 +322,7 @@ def _mixture_phase(ks, medium_s, spec, n, cos_theta, out):
         for m in range(ks.density_scale.shape[0]):
             if medium_s[m, i] > 0.0:
                 total += medium_s[m, i]
-                weighted += medium_s[m, i] * _phase_pdf(ks, m, spec[m, SPEC_ANISOTROPY, i], cos_theta)
+                weighted += medium_s[m, i] * phase_pdf(ks, m, spec[m, SPEC_ANISOTROPY, i], cos_theta)
         out[i] = weighted / total if total > 0.0 else 0.0
 
 
@@ -421,7 +344,7 @@ def _pick_medium(weights, i, u):
 @jit(inline="always")
 def _sky_radiance(ks, light, lam, dz):
     t = min(max(dz, 0.0), 1.0)
-    return t * _table(ks.light_spd[light], lam) + (1.0 - t) * _table(ks.light_spd_horizon[light], lam)
+    return t * table_at(ks.light_spd, light, on_grid(lam)) + (1.0 - t) * table_at(ks.light_spd_horizon, light, on_grid(lam))
 
 
 @jit(inline="always")
@@ -434,14 +357,14 @@ def _infinite_radiance(ks, light, lam, dx, dy, dz):
     """Radiance of a non-delta infinite light seen along direction (dx, dy, dz) (0 for others)."""
     kind = ks.light_kind[light]
     if kind == LIGHT_ENVIRONMENT:
-        return _table(ks.light_spd[light], lam)
+        return table_at(ks.light_spd, light, on_grid(lam))
     if kind == LIGHT_SKY:
         return _sky_radiance(ks, light, lam, dz)
     if kind == LIGHT_SUN and ks.light_cos[light] < 1.0:
         to_sun = ks.light_dir[light]
         if dx * to_sun[0] + dy * to_sun[1] + dz * to_sun[2] >= ks.light_cos[light]:
             sin2 = 1.0 - ks.light_cos[light] ** 2
-            return _table(ks.light_spd[light], lam) / (math.pi * sin2)
+            return table_at(ks.light_spd, light, on_grid(lam)) / (math.pi * sin2)
     return 0.0
 
 
@@ -467,7 +390,7 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
         to_sun = ks.light_dir[light]
         if ks.light_cos[light] >= 1.0:
             for i in range(n):
-                radiance[i] = _table(ks.light_spd[light], lams[i])
+                radiance[i] = table_at(ks.light_spd, light, on_grid(lams[i]))
             return to_sun[0], to_sun[1], to_sun[2], 1.0, INF, True
         cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
         wx, wy, wz = sample_direction((to_sun[0], to_sun[1], to_sun[2]), cos_theta, u2)
@@ -496,7 +419,7 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
         elif cos_angle < ks.light_cos[light]:
             falloff = 0.0
     for i in range(n):
-        radiance[i] = _table(ks.light_spd[light], lams[i]) * falloff
+        radiance[i] = table_at(ks.light_spd, light, on_grid(lams[i])) * falloff
     return wx, wy, wz, 1.0, distance, True
 
 
@@ -574,22 +497,6 @@ def _sample_wavelengths(ks, n, path):
 
 
 @jit(inline="always")
-def _camera_ray(ks, px, py, stream):
-    """Origin and unit direction of a ray through pixel (px, py) (box filter), Blender camera conventions."""
-    ex, ey = ks.cam_extent[0], ks.cam_extent[1]
-    cx = (-0.5 + (px + _next(stream)) / ks.width) * ex + ks.cam_extent[2]
-    cy = (0.5 - (py + _next(stream)) / ks.height) * ey + ks.cam_extent[3]
-    if ks.cam_kind == CAMERA_PERSPECTIVE:
-        ox, oy, oz = _transform_point(ks.cam_to_world, 0.0, 0.0, 0.0)
-        dx, dy, dz = _transform_vector(ks.cam_to_world, cx, cy, -1.0)
-    else:
-        ox, oy, oz = _transform_point(ks.cam_to_world, cx, cy, 0.0)
-        dx, dy, dz = _transform_vector(ks.cam_to_world, 0.0, 0.0, -1.0)
-    dx, dy, dz = _normalize(dx, dy, dz)
-    return ox, oy, oz, dx, dy, dz
-
-
-@jit(inline="always")
 def _path_xyz(ks, n, path):
     """The path's XYZ estimate: each camera wavelength's radiance over its pdf, through the XYZ weights."""
     x, y, z = 0.0, 0.0, 0.0
@@ -597,9 +504,10 @@ def _path_xyz(ks, n, path):
         if path.radiance[i] == 0.0 or path.pdf_cam[i] <= 0.0:
             continue
         scale = path.radiance[i] / (path.pdf_cam[i] * n)
-        x += scale * _table(ks.xyz_weights[0], path.lam_cam[i])
-        y += scale * _table(ks.xyz_weights[1], path.lam_cam[i])
-        z += scale * _table(ks.xyz_weights[2], path.lam_cam[i])
+        at = on_grid(path.lam_cam[i])
+        x += scale * table_at(ks.xyz_weights, 0, at)
+        y += scale * table_at(ks.xyz_weights, 1, at)
+        z += scale * table_at(ks.xyz_weights, 2, at)
     return x, y, z
 
 
@@ -623,9 +531,9 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tr
         _coefficients(ks, ox + t * dx, oy + t * dy, oz + t * dz, path.lams, path.spec, n, shadow)
         largest = 0.0
         for i in range(n):
-            sigma_n = max(0.0, sigma_bar - shadow.sigma_a[i] - shadow.sigma_s[i])
-            transmittance[i] *= sigma_n / sigma_bar
-            null_ratio[i] *= sigma_n / sigma_bar
+            ratio = null_fraction(sigma_bar, shadow.sigma_a[i], shadow.sigma_s[i])
+            transmittance[i] *= ratio
+            null_ratio[i] *= ratio
             largest = max(largest, transmittance[i])
         if largest == 0.0:
             return
@@ -643,19 +551,14 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tr
 def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, shadow, light, tracker):
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
     transmittance, MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
-    n_lights = ks.light_kind.shape[0]
-    chosen = 0
-    choice = _next(path.stream)
-    while chosen < n_lights - 1 and choice >= ks.light_pmf[chosen]:
-        choice -= ks.light_pmf[chosen]
-        chosen += 1
+    chosen = choose_light(ks.light_pmf, _next(path.stream))
     u1, u2 = _next(path.stream), _next(path.stream)
     wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, chosen, ox, oy, oz, u1, u2, path.lams, n,
                                                                light.radiance)
     cos_theta = dx * wx + dy * wy + dz * wz
     if isotropic:
         for i in range(n):
-            light.phase[i] = 0.25 / math.pi
+            light.phase[i] = INV_FOUR_PI
     else:
         _mixture_phase(ks, vertex.medium_s, path.spec, n, cos_theta, light.phase)
     any_light = False
@@ -741,12 +644,12 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, n, path, vertex, tracker, fl
                 if beta[i] > 0.0:
                     alive = True
             return (EVENT_SCATTER if alive else EVENT_ABSORB), qx, qy, qz, sigma_bar
-        probability0 = max(0.0, sigma_bar - sigma_a[0] - sigma_s[0]) / sigma_bar
+        probability0 = null_fraction(sigma_bar, sigma_a[0], sigma_s[0])
         alive = False
         for i in range(n):
-            sigma_n = max(0.0, sigma_bar - sigma_a[i] - sigma_s[i])
-            beta[i] *= sigma_n / sigma_bar / probability0
-            r_u[i] *= sigma_n / sigma_bar / probability0
+            ratio = null_fraction(sigma_bar, sigma_a[i], sigma_s[i])
+            beta[i] *= ratio / probability0
+            r_u[i] *= ratio / probability0
             r_l[i] /= probability0
             if beta[i] > 0.0:
                 alive = True
@@ -815,7 +718,7 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
     nx, ny, nz = sample_direction((dx, dy, dz), new_cos, u2)
     if isotropic:
         for i in range(n):
-            phase_values[i] = 0.25 / math.pi
+            phase_values[i] = INV_FOUR_PI
     else:
         _mixture_phase(ks, vertex.medium_s, path.spec, n, new_cos, phase_values)
     pdf0 = phase_values[0]
@@ -825,7 +728,7 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
         path.r_l[i] = path.r_u[i] / pdf0
         path.beta[i] *= phase_values[i] / pdf0
         path.r_u[i] *= phase_values[i] / pdf0
-    return _normalize(nx, ny, nz)
+    return normalize(nx, ny, nz)
 
 
 @jit(inline="always")
@@ -943,7 +846,7 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
         path.stream[1] = 0
         path.stream[3] = sample
         _sample_wavelengths(ks, n, path)
-        ox, oy, oz, dx, dy, dz = _camera_ray(ks, px, py, path.stream)
+        ox, oy, oz, dx, dy, dz = camera_ray(ks, px, py, _next(path.stream), _next(path.stream))
         _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, fl)
         x, y, z = _path_xyz(ks, n, path)
         sx, sy, sz = sx + x, sy + y, sz + z

@@ -4,7 +4,10 @@ It runs the algorithm of `numba_backend` (see its docstring) with no compiled de
 second engine that validates the Numba kernel. Paths are not traced one at a time: the paths of a tile
 (in chunks of at most `CHUNK_PATHS`) are arrays of path states (`_Batch`, one row per path) that step
 together and are compacted as they end. One `_bounce` takes every live path through free flight, escape,
-the scattering or fluorescent vertex, next-event estimation, phase sampling and Russian roulette.
+the scattering or fluorescent vertex, next-event estimation, phase sampling and Russian roulette. The
+physics at each point is the arithmetic the Numba kernel compiles (look-ups, coefficients, phase functions,
+lights, free paths: docs/algorithm.md), called here on arrays of paths; this module holds
+the wavefront's loops and state.
 
 Free flight and shadow rays traverse each medium's majorant grid block by block, a DDA vectorised over
 rays (`_tracker_*`, the same state machine as the Numba kernel's): each loop iteration moves every ray by
@@ -20,25 +23,18 @@ which can send a path down another branch). Masked lanes may compute values that
 import numpy as np
 
 from ..binned import linear_over_binned, pdf_binned, sample_binned
-from ..phase import hg_pdf, hg_sample_cos, rayleigh_pdf, rayleigh_sample_cos, sample_direction
-from ..planck import planck_radiance
-from ..wavelengths import GRID, LAMBDA_MIN
+from ..phase import INV_FOUR_PI, hg_sample_cos, rayleigh_sample_cos, sample_direction
+from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
-from .layout import (
-    CAMERA_PERSPECTIVE as PERSPECTIVE,
-    LIGHT_ENVIRONMENT as ENVIRONMENT,
-    LIGHT_SKY as SKY,
-    LIGHT_SPOT as SPOT,
-    LIGHT_SUN as SUN,
-    PHASE_RAYLEIGH,
-    SHADOW_ROULETTE_BELOW,
-    SHADOW_ROULETTE_STOP,
-)
+from .geometry import camera_ray, normalize, transform_point, transform_vector
+from .layout import PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
+from .layout import LIGHT_ENVIRONMENT as ENVIRONMENT, LIGHT_SKY as SKY, LIGHT_SPOT as SPOT, LIGHT_SUN as SUN
+from .light_sampling import choose_light
+from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
 INF = np.inf
-INV_FOUR_PI = 0.25 / np.pi
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_ABSORB = 0, 1, 2
 
 
@@ -73,50 +69,23 @@ def _draw(paths, rows=slice(None)):
 
 # ----------------------------------------------------------------------------- small helpers
 
-def _at(lam):
-    """Where wavelengths `lam` fall on the grid, for `_table`: (bin index, weights of its two ends, inside)."""
-    position = lam - LAMBDA_MIN
-    inside = (position >= 0.0) & (position <= GRID.size - 1)
-    index = np.minimum(np.where(inside, position, 0.0).astype(np.int64), GRID.size - 2)
-    frac = position - index
-    return index, 1.0 - frac, frac, inside
-
-
-def _table(row, at):
-    """Linear interpolation of a per-nanometre table at the wavelengths located by `_at` (0 off the grid)."""
-    index, w0, w1, inside = at
-    return np.where(inside, row[index] * w0 + row[index + 1] * w1, 0.0)
-
-
-def _table_rows(table, rows, at):
-    """`_table(table[rows[k]], at)` for each path k (wavelengths of shape (paths, n))."""
-    index, w0, w1, inside = at
-    rows = rows[:, None]
-    return np.where(inside, table[rows, index] * w0 + table[rows, index + 1] * w1, 0.0)
-
-
-def _transform_point(m, p):
-    x, y, z = p[:, 0], p[:, 1], p[:, 2]
-    return np.stack([m[k, 0] * x + m[k, 1] * y + m[k, 2] * z + m[k, 3] for k in range(3)], axis=1)
-
-
-def _transform_vector(m, v):
-    x, y, z = v[:, 0], v[:, 1], v[:, 2]
-    return np.stack([m[k, 0] * x + m[k, 1] * y + m[k, 2] * z for k in range(3)], axis=1)
-
-
 def _dot(a, b):
     return a[:, 0] * b[0] + a[:, 1] * b[1] + a[:, 2] * b[2]
 
 
-def _normalize(v):
-    inv = 1.0 / np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
-    return v * inv[:, None]
+def _columns(v):
+    """The components (x, y, z) of rows of 3-vectors, as the shared functions take points and directions."""
+    return v[:, 0], v[:, 1], v[:, 2]
+
+
+def _rows(components, count):
+    """Rows of 3-vectors from components (a component that is one scalar for every row is repeated)."""
+    return np.stack([np.broadcast_to(c, (count,)) for c in components], axis=1)
 
 
 def _direction(d, cos_theta, u):
     """Rows of unit vectors at angle acos(cos_theta) from the rows of `d`, azimuth 2πu."""
-    return np.stack(sample_direction((d[:, 0], d[:, 1], d[:, 2]), cos_theta, u), axis=1)
+    return _rows(sample_direction(_columns(d), cos_theta, u), d.shape[0])
 
 
 def _mean(values):
@@ -129,91 +98,35 @@ def _mean(values):
 
 # ----------------------------------------------------------------------------- volume look-ups
 
-def _trilinear(data, offset, shape, points):
-    """Trilinear interpolation of cell-centre samples at index-space points (rows), zero outside.
-
-    Per axis and corner bit: the cell's flat-index term (clipped into the grid) and its weight, zero for
-    cells outside, so that outside corners add exactly nothing, as the Numba kernel skips them."""
-    floor = np.floor(points)
-    base = floor.astype(np.int64)
-    frac = points - floor
-    strides = (shape[1] * shape[2], shape[2], 1)
-    terms, weights = [], []
-    for axis in range(3):
-        per_bit_terms, per_bit_weights = [], []
-        for bit, weight in ((0, 1.0 - frac[:, axis]), (1, frac[:, axis])):
-            cell = base[:, axis] + bit
-            inside = (cell >= 0) & (cell < shape[axis])
-            per_bit_terms.append(np.where(inside, cell, 0) * strides[axis])
-            per_bit_weights.append(np.where(inside, weight, 0.0))
-        terms.append(per_bit_terms)
-        weights.append(per_bit_weights)
-    total = np.zeros(points.shape[0])
-    for bz in (0, 1):  # corners in the Numba kernel's order (x fastest), so the sums round alike
-        for by in (0, 1):
-            for bx in (0, 1):
-                index = offset + terms[0][bx] + terms[1][by] + terms[2][bz]
-                total = total + weights[0][bx] * weights[1][by] * weights[2][bz] * data[index]
-    return total
-
-
-def _density(ks, m, points):
-    q = _transform_point(ks.world_to_padded[m], points)
-    return _trilinear(ks.density_data, ks.density_offset[m], ks.density_shape[m], q - 1.0)
-
-
-def _temperature(ks, m, points):
-    q = _transform_point(ks.temperature_world_to_padded[m], points)
-    raw = _trilinear(ks.temperature_data, ks.temperature_offset[m], ks.temperature_shape[m], q - 1.0)
-    return raw * ks.temperature_map[m, 0] + ks.temperature_map[m, 1]
-
-
-def _albedo(ks, m, density, at):
-    """Single-scattering albedo at raw densities (rows) and wavelengths (columns): the density levels'
-    tables interpolated linearly, clamped outside the levels."""
-    count = ks.albedo_count[m]
-    levels = ks.albedo_densities[m, :count]
-    table = ks.albedo_table[m]
-    lowest = _table(table[0], at)
-    if count == 1:
-        return lowest
-    upper = np.clip(np.searchsorted(levels, density, side="left"), 1, count - 1)
-    t = ((density - levels[upper - 1]) / (levels[upper] - levels[upper - 1]))[:, None]
-    between = (1.0 - t) * _table_rows(table, upper - 1, at) + t * _table_rows(table, upper, at)
-    highest = _table(table[count - 1], at)
-    return np.where((density <= levels[0])[:, None], lowest,
-                    np.where((density >= levels[count - 1])[:, None], highest, between))
-
-
 def _coefficients(ks, points, lams):
     """Medium coefficients at points (rows) for each path wavelength (columns), summed over media;
     per-medium scattering and fluorescence coefficients (which medium scatters); thermal emission."""
     count, n = lams.shape
-    media = ks.density_scale.shape[0]
+    shape = (count, ks.density_scale.shape[0], n)
     out = _Batch(sigma_a=np.zeros((count, n)), sigma_s=np.zeros((count, n)),
-                 emission=np.zeros((count, n)), medium_s=np.zeros((count, media, n)),
-                 medium_fl=np.zeros((count, media, n)), dye=np.zeros(count))
-    for m in range(media):
-        rho = _density(ks, m, points) * ks.density_scale[m]
+                 emission=np.zeros((count, n)), medium_s=np.zeros(shape),
+                 medium_fl=np.zeros(shape), dye=np.zeros(count))
+    for m in range(shape[1]):
+        rho = media.density(ks, m, *_columns(points)) * ks.density_scale[m]
         rows = np.flatnonzero(rho > 0.0)
         if rows.size == 0:
             continue
         if ks.fluor_strength[m] > 0.0:
             out.dye[rows] += rho[rows] * ks.excitation_mean[m]
         lam, r = lams[rows], rho[rows, None]
-        at = _at(lam)
-        sigma_t = r * _table(ks.extinction[m], at)
-        scattering = sigma_t * _albedo(ks, m, rho[rows] / ks.density_scale[m], at)
-        plain_absorption = sigma_t - scattering
-        fluorescence = r * ks.fluor_strength[m] * _table(ks.emission_pdf[m], at)
+        at = on_grid(lam)
+        albedo_value = (table_at(ks.albedo_table[m], 0, at) if ks.albedo_count[m] == 1
+                        else media.albedo(ks, m, r / ks.density_scale[m], at))
+        scattering, absorption, plain_absorption, fluorescence = media.collision_coefficients(
+            r, table_at(ks.extinction, m, at), albedo_value, table_at(ks.excitation, m, at), ks.fluor_strength[m],
+            table_at(ks.emission_pdf, m, at))
         out.medium_s[rows, m] = scattering
         out.medium_fl[rows, m] = fluorescence
         out.sigma_s[rows] += scattering
-        out.sigma_a[rows] += plain_absorption + r * _table(ks.excitation[m], at)
+        out.sigma_a[rows] += absorption
         if ks.temperature_offset[m] >= 0:
-            temperature = _temperature(ks, m, points[rows])[:, None]
-            glow = plain_absorption * ks.temperature_map[m, 2] * planck_radiance(lam, temperature)
-            out.emission[rows] += np.where(temperature > 0.0, glow, 0.0)
+            kelvin = media.temperature(ks, m, *_columns(points[rows]))[:, None]
+            out.emission[rows] += media.thermal_emission(plain_absorption, ks.temperature_map[m, 2], lam, kelvin)
     return out
 
 
@@ -232,8 +145,8 @@ def _tracker_start(ks, origins, directions, t_max):
                      t_next=np.zeros((count, media, 3)), t_delta=np.zeros((count, media, 3)),
                      lo=np.zeros((count, media, 3)), ld=np.zeros((count, media, 3)))
     for m in range(media):
-        lo = _transform_point(ks.world_to_padded[m], origins)
-        ld = _transform_vector(ks.world_to_padded[m], directions)
+        lo = _rows(transform_point(ks.world_to_padded[m], *_columns(origins)), count)
+        ld = _rows(transform_vector(ks.world_to_padded[m], *_columns(directions)), count)
         t0, t1 = np.zeros(count), np.broadcast_to(t_max, (count,)).astype(np.float64)
         for axis in range(3):
             o, d = lo[:, axis], ld[:, axis]
@@ -320,7 +233,7 @@ def _track(ks, paths, rows, origins, directions, t_max, collide):
         escaped = t_end == INF
         drawing = ~escaped & (sigma_bar > 0.0)
         step = np.zeros(len(flight))
-        step[drawing] = -np.log(1.0 - _draw(paths, rows[flight.ray[drawing]])) / sigma_bar[drawing]
+        step[drawing] = media.free_path(_draw(paths, rows[flight.ray[drawing]]), sigma_bar[drawing])
         crossing = ~escaped & (~drawing | (flight.t + step >= t_end))
         colliding = drawing & ~crossing
         flight.t = np.where(crossing, t_end, np.where(colliding, flight.t + step, flight.t))
@@ -337,22 +250,17 @@ def _track(ks, paths, rows, origins, directions, t_max, collide):
 
 # ----------------------------------------------------------------------------- phase functions
 
-def _phase_pdf(ks, m, at, cos_theta):
-    if ks.phase_kind[m] == PHASE_RAYLEIGH:
-        return rayleigh_pdf(cos_theta)
-    return hg_pdf(_table(ks.anisotropy[m], at), cos_theta)
-
-
 def _mixture_phase(ks, medium_s, lams, cos_theta):
     """Phase pdf (= value) at each path wavelength: the σ_s-weighted mixture of the media's phases."""
     total = np.zeros(lams.shape)
     weighted = np.zeros(lams.shape)
-    at = _at(lams)
+    at = on_grid(lams)
     for m in range(medium_s.shape[1]):
         weight = medium_s[:, m]
         scatters = weight > 0.0
+        pdf = media.phase_pdf(ks, m, table_at(ks.anisotropy, m, at), cos_theta[:, None])
         total = total + np.where(scatters, weight, 0.0)
-        weighted = weighted + np.where(scatters, weight * _phase_pdf(ks, m, at, cos_theta[:, None]), 0.0)
+        weighted = weighted + np.where(scatters, weight * pdf, 0.0)
     return np.where(total > 0.0, weighted / total, 0.0)
 
 
@@ -383,14 +291,14 @@ def _infinite_radiance(ks, light, at, directions):
     `at` (0 for other lights)."""
     kind = ks.light_kind[light]
     if kind == ENVIRONMENT:
-        return _table(ks.light_spd[light], at)
+        return table_at(ks.light_spd, light, at)
     if kind == SKY:
         t = np.minimum(np.maximum(directions[:, 2], 0.0), 1.0)[:, None]
-        return t * _table(ks.light_spd[light], at) + (1.0 - t) * _table(ks.light_spd_horizon[light], at)
+        return t * table_at(ks.light_spd, light, at) + (1.0 - t) * table_at(ks.light_spd_horizon, light, at)
     if kind == SUN and ks.light_cos[light] < 1.0:
         seen = _dot(directions, ks.light_dir[light]) >= ks.light_cos[light]
         sin2 = 1.0 - ks.light_cos[light] ** 2
-        return np.where(seen[:, None], _table(ks.light_spd[light], at) / (np.pi * sin2), 0.0)
+        return np.where(seen[:, None], table_at(ks.light_spd, light, at) / (np.pi * sin2), 0.0)
     return np.zeros(at[0].shape)
 
 
@@ -410,10 +318,10 @@ def _sample_light(ks, light, points, u1, u2, lams):
     distance, delta flag, incident radiance per wavelength (irradiance / intensity / d² for delta))."""
     kind = ks.light_kind[light]
     count = points.shape[0]
-    at = _at(lams)
+    at = on_grid(lams)
     if kind == SUN and ks.light_cos[light] >= 1.0:
         return (np.broadcast_to(ks.light_dir[light], (count, 3)), np.ones(count), np.full(count, INF),
-                True, _table(ks.light_spd[light], at))
+                True, table_at(ks.light_spd, light, at))
     if kind == SUN:
         cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
         w = _direction(np.broadcast_to(ks.light_dir[light], (count, 3)), cos_theta, u2)
@@ -437,7 +345,7 @@ def _sample_light(ks, light, points, u1, u2, lams):
             falloff = falloff * (t * t * (3.0 - 2.0 * t))
         else:
             falloff = np.where(cos_angle < ks.light_cos[light], 0.0, falloff)
-    return w, np.ones(count), distance, True, _table(ks.light_spd[light], at) * falloff[:, None]
+    return w, np.ones(count), distance, True, table_at(ks.light_spd, light, at) * falloff[:, None]
 
 
 def _sample_lights(ks, lights, points, u1, u2, lams):
@@ -451,16 +359,6 @@ def _sample_lights(ks, lights, points, u1, u2, lams):
             out.w[rows], out.pdf[rows], out.distance[rows], out.delta[rows], out.radiance[rows] = _sample_light(
                 ks, light, points[rows], u1[rows], u2[rows], lams[rows])
     return out
-
-
-def _choose_lights(ks, choice):
-    """Each path's light for next-event estimation, by walking the pmf with its uniform number."""
-    lights = np.zeros(choice.shape[0], dtype=np.int64)
-    for light in range(ks.light_kind.shape[0] - 1):
-        further = (lights == light) & (choice >= ks.light_pmf[light])
-        choice = np.where(further, choice - ks.light_pmf[light], choice)
-        lights[further] += 1
-    return lights
 
 
 # ----------------------------------------------------------------------------- transport
@@ -484,17 +382,8 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
         lam_cam[:, i] = sample_binned(ks.lambda_cdf, ui)
         pdf_cam[:, i] = pdf_binned(ks.lambda_pdf, lam_cam[:, i])
     paths.lams[:] = lam_cam
-    ex, ey = ks.cam_extent[0], ks.cam_extent[1]
-    cx = (-0.5 + (px + _draw(paths)) / ks.width) * ex + ks.cam_extent[2]
-    cy = (0.5 - (py + _draw(paths)) / ks.height) * ey + ks.cam_extent[3]
-    zeros = np.zeros(count)
-    if ks.cam_kind == PERSPECTIVE:
-        paths.o = _transform_point(ks.cam_to_world, np.stack([zeros, zeros, zeros], axis=1))
-        paths.d = _transform_vector(ks.cam_to_world, np.stack([cx, cy, zeros - 1.0], axis=1))
-    else:
-        paths.o = _transform_point(ks.cam_to_world, np.stack([cx, cy, zeros], axis=1))
-        paths.d = _transform_vector(ks.cam_to_world, np.stack([zeros, zeros, zeros - 1.0], axis=1))
-    paths.d = _normalize(paths.d)
+    ray = camera_ray(ks, px, py, _draw(paths), _draw(paths))
+    paths.o, paths.d = _rows(ray[:3], count), _rows(ray[3:], count)
     return paths, lam_cam, pdf_cam
 
 
@@ -539,9 +428,8 @@ def _free_flight(ks, paths, radiance, fl):
     Returns each path's event and the vertex data of scattering events (position q and the per-medium
     σ_s at q)."""
     count, n = paths.lams.shape
-    media = ks.density_scale.shape[0]
     vertex = _Batch(event=np.full(count, EVENT_ESCAPE, dtype=np.int8), q=np.zeros((count, 3)),
-                    medium_s=np.zeros((count, media, n)))
+                    medium_s=np.zeros((count, ks.density_scale.shape[0], n)))
 
     def collide(rows, points, sigma_bar):
         c = _coefficients(ks, points, paths.lams[rows])
@@ -550,17 +438,17 @@ def _free_flight(ks, paths, radiance, fl):
         mean_r_u = _mean(r_u)
         radiance[paths.id[rows]] += np.where(c.emission > 0.0, beta * c.emission / (bar * mean_r_u[:, None]), 0.0)
         _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl)
-        sigma_n = np.maximum(0.0, bar - c.sigma_a - c.sigma_s)
+        ratio = media.null_fraction(bar, c.sigma_a, c.sigma_s)
         choice = _draw(paths, rows) * sigma_bar
         sigma_t = c.sigma_a + c.sigma_s
         # A real collision scatters, weighted by the albedo (as in the Numba kernel).
         collided = choice < sigma_t[:, 0]
         null = ~collided
-        p0 = np.where(collided, sigma_t[:, 0], sigma_n[:, 0])[:, None] / bar
+        p0 = np.where(collided, sigma_t[:, 0] / sigma_bar, ratio[:, 0])[:, None]
         beta = np.where(collided[:, None], beta * (c.sigma_s / bar / p0), beta)
         r_u = np.where(collided[:, None], r_u * (sigma_t / bar / p0), r_u)
-        beta = np.where(null[:, None], beta * (sigma_n / bar / p0), beta)
-        r_u = np.where(null[:, None], r_u * (sigma_n / bar / p0), r_u)
+        beta = np.where(null[:, None], beta * (ratio / p0), beta)
+        r_u = np.where(null[:, None], r_u * (ratio / p0), r_u)
         r_l = np.where(null[:, None], r_l / p0, r_l)
         paths.beta[rows], paths.r_u[rows], paths.r_l[rows] = beta, r_u, r_l
         alive = np.any(beta > 0.0, axis=1)
@@ -580,7 +468,7 @@ def _escape(ks, paths, radiance):
     """Radiance of the infinite lights seen by escaping paths: plain for camera rays, MIS-weighted
     against light sampling after a scattering vertex."""
     plain_mean = _mean(paths.r_u)
-    at = _at(paths.lams)
+    at = on_grid(paths.lams)
     for light in range(ks.light_kind.shape[0]):
         light_radiance = _infinite_radiance(ks, light, at, paths.d)
         light_pdf = ks.light_pmf[light] * _infinite_pdf(ks, light, paths.d)
@@ -598,9 +486,9 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams):
     def collide(rays, points, sigma_bar):
         c = _coefficients(ks, points, lams[rays])
         bar = sigma_bar[:, None]
-        sigma_n = np.maximum(0.0, bar - c.sigma_a - c.sigma_s)
-        transmittance[rays] *= sigma_n / bar
-        null_ratio[rays] *= sigma_n / bar
+        ratio = media.null_fraction(bar, c.sigma_a, c.sigma_s)
+        transmittance[rays] *= ratio
+        null_ratio[rays] *= ratio
         largest = np.max(transmittance[rays], axis=1, initial=0.0)
         faint = np.flatnonzero((largest > 0.0) & (largest < SHADOW_ROULETTE_BELOW))
         lost = _draw(paths, rows[rays[faint]]) < SHADOW_ROULETTE_STOP
@@ -618,7 +506,7 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
     """Next-event estimation from every vertex: one light chosen by its pmf, ratio-tracked
     transmittance, MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
     choice, u1, u2 = _draw(paths), _draw(paths), _draw(paths)
-    lights = _choose_lights(ks, choice)
+    lights = choose_light(ks.light_pmf, choice)
     sample = _sample_lights(ks, lights, paths.o, u1, u2, paths.lams)
     cos_theta = (paths.d[:, 0] * sample.w[:, 0] + paths.d[:, 1] * sample.w[:, 1]
                  + paths.d[:, 2] * sample.w[:, 2])
@@ -651,7 +539,7 @@ def _sample_phase(ks, paths, vertex, isotropic):
         if ks.phase_kind[m] == PHASE_RAYLEIGH:
             new_cos[rows] = rayleigh_sample_cos(u1[rows])
         else:
-            new_cos[rows] = hg_sample_cos(_table(ks.anisotropy[m], _at(paths.lams[rows, 0])), u1[rows])
+            new_cos[rows] = hg_sample_cos(table_at(ks.anisotropy, m, on_grid(paths.lams[rows, 0])), u1[rows])
     direction = _direction(paths.d, new_cos, u2)
     phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
                             _mixture_phase(ks, vertex.medium_s, paths.lams, new_cos))
@@ -659,7 +547,7 @@ def _sample_phase(ks, paths, vertex, isotropic):
     paths.r_l = paths.r_u / pdf0
     paths.beta = paths.beta * (phase_values / pdf0)
     paths.r_u = paths.r_u * (phase_values / pdf0)
-    paths.d = _normalize(direction)
+    paths.d = _rows(normalize(*_columns(direction)), len(paths))
     paths.scattered[:] = True
     return pdf0[:, 0] > 0.0
 
@@ -766,9 +654,9 @@ def _trace(ks, px, py, pixel_keys, samples):
     for i in range(n):
         counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
         scale_i = radiance[:, i] / (pdf_cam[:, i] * n)
-        at = _at(lam_cam[:, i])
+        at = on_grid(lam_cam[:, i])
         for c in range(3):
-            xyz[:, c] += np.where(counted, scale_i * _table(ks.xyz_weights[c], at), 0.0)
+            xyz[:, c] += np.where(counted, scale_i * table_at(ks.xyz_weights, c, at), 0.0)
     return xyz
 
 

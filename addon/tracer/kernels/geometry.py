@@ -1,0 +1,51 @@
+"""Points and directions as components (x, y, z): affine transforms, normalisation, and the camera's ray
+through a point of the film.
+
+Plain arithmetic shared by both backends (`shared_math`): one path's scalars in the Numba kernel, arrays of
+paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`).
+"""
+
+import numpy as np
+
+from ..shared_math import shared
+from .layout import CAMERA_PERSPECTIVE
+
+
+@shared
+def transform_point(m, x, y, z):
+    """The point (x, y, z) through the 4×4 affine matrix `m`."""
+    return (m[0, 0] * x + m[0, 1] * y + m[0, 2] * z + m[0, 3],
+            m[1, 0] * x + m[1, 1] * y + m[1, 2] * z + m[1, 3],
+            m[2, 0] * x + m[2, 1] * y + m[2, 2] * z + m[2, 3])
+
+
+@shared
+def transform_vector(m, x, y, z):
+    """The vector (x, y, z) through the linear part of the 4×4 matrix `m`."""
+    return (m[0, 0] * x + m[0, 1] * y + m[0, 2] * z,
+            m[1, 0] * x + m[1, 1] * y + m[1, 2] * z,
+            m[2, 0] * x + m[2, 1] * y + m[2, 2] * z)
+
+
+@shared
+def normalize(x, y, z):
+    """(x, y, z) scaled to unit length."""
+    inv = 1.0 / np.sqrt(x * x + y * y + z * z)
+    return x * inv, y * inv, z * inv
+
+
+@shared
+def camera_ray(ks, px, py, u1, u2):
+    """Origin and unit direction (ox, oy, oz, dx, dy, dz) of the ray through the film point (px + u1, py + u2)
+    of pixel (px, py) (a box filter), in Blender's camera conventions: the film spans `cam_extent` at z = −1
+    (perspective) or at the camera (orthographic), the camera looking along −z."""
+    cx = (-0.5 + (px + u1) / ks.width) * ks.cam_extent[0] + ks.cam_extent[2]
+    cy = (0.5 - (py + u2) / ks.height) * ks.cam_extent[1] + ks.cam_extent[3]
+    if ks.cam_kind == CAMERA_PERSPECTIVE:
+        ox, oy, oz = transform_point(ks.cam_to_world, 0.0, 0.0, 0.0)
+        dx, dy, dz = transform_vector(ks.cam_to_world, cx, cy, -1.0)
+    else:
+        ox, oy, oz = transform_point(ks.cam_to_world, cx, cy, 0.0)
+        dx, dy, dz = transform_vector(ks.cam_to_world, 0.0, 0.0, -1.0)
+    dx, dy, dz = normalize(dx, dy, dz)
+    return ox, oy, oz, dx, dy, dz

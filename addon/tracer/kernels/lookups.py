@@ -1,0 +1,57 @@
+"""Look-ups of the kernel scene's tables and grids: spectra on the wavelength grid (linear between its
+nodes, 0 off the grid) and cell-centre grids (trilinear, 0 outside).
+
+Plain arithmetic shared by both backends (`shared_math`): one path's scalars in the Numba kernel, arrays of
+paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`).
+"""
+
+import numpy as np
+
+from ..shared_math import shared, shared_inline
+from ..wavelengths import GRID, LAMBDA_MIN
+
+_NODES = GRID.size
+
+
+@shared
+def on_grid(lam):
+    """Where wavelength(s) `lam` fall on the grid, for `table_at`: (bin index, position in the bin, inside)."""
+    position = lam - LAMBDA_MIN
+    index = np.int64(np.minimum(np.maximum(position, 0.0), _NODES - 2.0))
+    return index, position - index, (position >= 0.0) & (position <= _NODES - 1.0)
+
+
+@shared
+def table_at(table, row, at):
+    """Spectrum `table[row]` (a table of spectra on the grid) at the wavelengths located by `at` (`on_grid`)."""
+    index, frac, inside = at
+    return (table[row, index] * (1.0 - frac) + table[row, index + 1] * frac) * inside
+
+
+@shared
+def _corners(coordinate, cells, stride):
+    """Along one axis of a grid of `cells` cells: the flat-index terms of the cells below and above the
+    coordinate (clamped into the grid) and their weights, zero for a cell outside the grid."""
+    floor = np.floor(coordinate)
+    below = np.int64(floor)
+    frac = coordinate - floor
+    above = below + 1
+    return (np.minimum(np.maximum(below, 0), cells - 1) * stride, np.minimum(np.maximum(above, 0), cells - 1) * stride,
+            (1.0 - frac) * ((below >= 0) & (below < cells)), frac * ((above >= 0) & (above < cells)))
+
+
+@shared_inline
+def trilinear(data, offset, shape, x, y, z):
+    """Trilinear interpolation of cell-centre samples at index-space point(s) (x, y, z), zero outside: the
+    grid of `shape` is flattened (C order) into `data` from `offset`; corners outside add nothing."""
+    x0, x1, wx0, wx1 = _corners(x, shape[0], shape[1] * shape[2])
+    y0, y1, wy0, wy1 = _corners(y, shape[1], shape[2])
+    z0, z1, wz0, wz1 = _corners(z, shape[2], 1)
+    total = wx0 * wy0 * wz0 * data[offset + x0 + y0 + z0]  # corners in this order (x fastest) in both backends
+    total = total + wx1 * wy0 * wz0 * data[offset + x1 + y0 + z0]
+    total = total + wx0 * wy1 * wz0 * data[offset + x0 + y1 + z0]
+    total = total + wx1 * wy1 * wz0 * data[offset + x1 + y1 + z0]
+    total = total + wx0 * wy0 * wz1 * data[offset + x0 + y0 + z1]
+    total = total + wx1 * wy0 * wz1 * data[offset + x1 + y0 + z1]
+    total = total + wx0 * wy1 * wz1 * data[offset + x0 + y1 + z1]
+    return total + wx1 * wy1 * wz1 * data[offset + x1 + y1 + z1]

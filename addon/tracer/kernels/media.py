@@ -1,0 +1,85 @@
+"""A medium at a point: its density and temperature (grid look-ups), its albedo between density levels,
+the coefficients of a collision there, its thermal emission and its phase function; and the arithmetic of
+tracking against a majorant σ̄ (free paths, null collisions).
+
+Plain arithmetic shared by both backends (`shared_math`): one path's scalars in the Numba kernel, arrays of
+paths in the NumPy backend (points as components x, y, z; wavelengths located by `lookups.on_grid`). They
+branch on a medium's own parameters, never on a path's values. Part of the kernel cache's key
+(`numba_cache.KERNEL_SOURCES`).
+"""
+
+import numpy as np
+
+from ..phase import hg_pdf, rayleigh_pdf
+from ..planck import planck_radiance
+from ..shared_math import shared
+from .geometry import transform_point
+from .layout import PHASE_RAYLEIGH
+from .lookups import table_at, trilinear
+
+
+@shared
+def density(ks, m, x, y, z):
+    """Medium m's raw density (before `density_scale`) at world point(s) (x, y, z)."""
+    qx, qy, qz = transform_point(ks.world_to_padded[m], x, y, z)
+    return trilinear(ks.density_data, ks.density_offset[m], ks.density_shape[m], qx - 1.0, qy - 1.0, qz - 1.0)
+
+
+@shared
+def temperature(ks, m, x, y, z):
+    """Medium m's temperature (K) at world point(s) (x, y, z): its grid's value mapped by scale and offset."""
+    qx, qy, qz = transform_point(ks.temperature_world_to_padded[m], x, y, z)
+    raw = trilinear(ks.temperature_data, ks.temperature_offset[m], ks.temperature_shape[m], qx - 1.0, qy - 1.0,
+                    qz - 1.0)
+    return raw * ks.temperature_map[m, 0] + ks.temperature_map[m, 1]
+
+
+@shared
+def albedo(ks, m, raw_density, at):
+    """Single-scattering albedo of medium m (two density levels or more; one level is its spectrum) at a
+    raw density: its levels' spectra interpolated linearly in density, clamped beyond the first and last."""
+    levels = ks.albedo_densities[m, :ks.albedo_count[m]]
+    upper = np.minimum(np.maximum(np.searchsorted(levels, raw_density, side="left"), 1), levels.shape[0] - 1)
+    low, high = levels[upper - 1], levels[upper]
+    t = np.minimum(np.maximum((raw_density - low) / (high - low), 0.0), 1.0)
+    table = ks.albedo_table[m]
+    return (1.0 - t) * table_at(table, upper - 1, at) + t * table_at(table, upper, at)
+
+
+@shared
+def collision_coefficients(rho, extinction, albedo_value, excitation, fluorescence_strength, emission_pdf):
+    """At density ρ (scaled) with a medium's spectra at a wavelength: (σ_s, σ_a, plain absorption, σ_fl).
+    σ_t = ρ·extinction scatters the albedo's share of it; the rest, the plain absorption, and the dye's
+    ρ·excitation absorb; σ_fl = ρ·strength·emission pdf is the fluorescent source per unit radiance."""
+    sigma_t = rho * extinction
+    scattering = sigma_t * albedo_value
+    plain_absorption = sigma_t - scattering
+    return (scattering, plain_absorption + rho * excitation, plain_absorption,
+            rho * fluorescence_strength * emission_pdf)
+
+
+@shared
+def thermal_emission(plain_absorption, intensity, lam, kelvin):
+    """Thermal emission σ_a · intensity · Planck(λ, T) of the plain absorption (0 where T ≤ 0)."""
+    return plain_absorption * intensity * planck_radiance(lam, kelvin)
+
+
+@shared
+def phase_pdf(ks, m, g, cos_theta):
+    """Medium m's phase function (= its pdf) at cos θ: Rayleigh, or Henyey–Greenstein with anisotropy g."""
+    if ks.phase_kind[m] == PHASE_RAYLEIGH:
+        return rayleigh_pdf(cos_theta)
+    return hg_pdf(g, cos_theta)
+
+
+@shared
+def free_path(u, sigma_bar):
+    """Distance to the next tentative collision against a majorant σ̄, for a uniform u: −ln(1 − u) / σ̄."""
+    return -np.log(1.0 - u) / sigma_bar
+
+
+@shared
+def null_fraction(sigma_bar, sigma_a, sigma_s):
+    """σ_n / σ̄ with σ_n = max(0, σ̄ − σ_a − σ_s): a null collision's share of a tentative one, and ratio
+    tracking's factor on the transmittance."""
+    return np.maximum(0.0, sigma_bar - sigma_a - sigma_s) / sigma_bar
