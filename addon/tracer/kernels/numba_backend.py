@@ -344,7 +344,8 @@ def _pick_medium(weights, i, u):
 @jit(inline="always")
 def _sky_radiance(ks, light, lam, dz):
     t = min(max(dz, 0.0), 1.0)
-    return t * table_at(ks.light_spd, light, on_grid(lam)) + (1.0 - t) * table_at(ks.light_spd_horizon, light, on_grid(lam))
+    at = on_grid(lam)
+    return t * table_at(ks.light_spd, light, at) + (1.0 - t) * table_at(ks.light_spd_horizon, light, at)
 
 
 @jit(inline="always")
