@@ -2,7 +2,7 @@
 
 Everything the integrator needs is precomputed here once per band: spectra tabulated on the grid,
 light spectra scaled to their strength and the lights' selection probabilities (`lights`), majorant
-grids, the hero-wavelength distribution (`wavelength_modes`) and the XYZ weights. Both backends read
+and minorant grids, the hero-wavelength distribution (`wavelength_modes`) and the XYZ weights. Both backends read
 the same `KernelScene`, so they cannot disagree about the scene.
 """
 
@@ -12,7 +12,7 @@ from . import colorimetry, sampling
 from .errors import SpectralError
 from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, PHASES, KernelScene
 from .lights import selection_powers, strength_scale
-from .majorant import block_size_for, majorant_grid
+from .majorant import block_size_for, majorant_grid, minorant_grid
 from .scene import Grid, Light, Medium, Scene
 from .wavelength_modes import default_band, with_band
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
@@ -84,6 +84,7 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
     majorants = [majorant_grid(d, b) for d, b in zip(densities, blocks)]
     out["majorant_data"], out["majorant_offset"], out["majorant_shape"] = _flatten(majorants)
     out["majorant_block"] = np.array(blocks, dtype=np.int64)
+    out["minorant_data"] = _flatten([minorant_grid(d, b) for d, b in zip(densities, blocks)])[0]
 
     temperatures = []
     for index, medium in enumerate(media):

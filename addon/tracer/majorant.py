@@ -1,10 +1,15 @@
-"""Majorant grids: the maximum density over coarse blocks of a density grid.
+"""Majorant and minorant grids: the maximum and the minimum density over coarse blocks of a density grid.
 
 The density field is the trilinear interpolation of the cell-centre samples with zero outside the
 array, so it is non-zero inside (-1, n) in index space. Kernels work in *padded* index space
 (index + 1), where the field lives in (0, n + 1) and majorant block b along an axis spans
-[b·B, (b+1)·B). A point in that block is influenced by the padded cells b·B … (b+1)·B (inclusive),
-so the block's majorant is the maximum over those cells (clipped to the array).
+[b·B, (b+1)·B). A point in that block is influenced by the padded cells b·B … (b+1)·B (inclusive), and
+its density is a convex combination of theirs, so the block's majorant and minorant are the maximum and
+the minimum over those cells (the padding's zeros included; a block reaching past the array holds zero
+density).
+
+Free flights track against the majorant; shadow rays towards delta lights track the minorant's
+extinction analytically and only the residual against the majorant (residual ratio tracking).
 """
 
 import numpy as np
@@ -15,19 +20,26 @@ def block_size_for(shape, target_blocks: int = 16) -> int:
     return max(1, int(np.ceil((max(shape) + 1) / target_blocks)))
 
 
-def majorant_grid(values: np.ndarray, block: int) -> np.ndarray:
-    """Maximum of `values` over each block's footprint (see module docstring), float32."""
+def _block_reduce(values: np.ndarray, block: int, reduce) -> np.ndarray:
+    """`reduce` (np.maximum or np.minimum) of `values` over each block's footprint, float32."""
     padded = np.pad(np.asarray(values, dtype=np.float32), 1)  # padded cell p = cell p-1; zeros at borders
     n_blocks = [int(np.ceil((n + 1) / block)) for n in values.shape]
-    out = np.zeros(n_blocks, dtype=np.float32)
-    starts = [np.arange(nb) * block for nb in n_blocks]
-    # Per axis, the padded cells b·B … (b+1)·B of each block, clipped to the padded array.
     reduced = padded
-    for axis, (nb, s) in enumerate(zip(n_blocks, starts)):
+    for axis, nb in enumerate(n_blocks):
         size = reduced.shape[axis]
-        parts = [np.take(reduced, np.arange(lo, min(lo + block + 1, size)), axis=axis).max(axis=axis, keepdims=True)
-                 if lo < size else np.zeros_like(np.take(reduced, [0], axis=axis))
-                 for lo in s]
+        parts = []  # a footprint clipped at the far end holds the padding's zero there
+        for lo in np.arange(nb) * block:
+            footprint = np.take(reduced, np.arange(lo, min(lo + block + 1, size)), axis=axis)
+            parts.append(reduce.reduce(footprint, axis=axis, keepdims=True))
         reduced = np.concatenate(parts, axis=axis)
-    out[...] = reduced
-    return out
+    return reduced.astype(np.float32)
+
+
+def majorant_grid(values: np.ndarray, block: int) -> np.ndarray:
+    """Maximum of `values` over each block's footprint (see module docstring), float32."""
+    return _block_reduce(values, block, np.maximum)
+
+
+def minorant_grid(values: np.ndarray, block: int) -> np.ndarray:
+    """Minimum of `values` over each block's footprint (see module docstring), float32."""
+    return _block_reduce(values, block, np.minimum)

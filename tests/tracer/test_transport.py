@@ -119,13 +119,24 @@ def _towards(offset, intensity):
     return offset / distance, intensity / distance**2, distance
 
 
-@pytest.mark.parametrize("light_name", list(SINGLE_SCATTERING_LIGHTS))
-def test_single_scattering_of_a_thin_medium_matches_quadrature(light_name):
-    """A lit thin box seen from above, single scattering only (max depth 1): the pixel radiance is
+SINGLE_SCATTERING_MEDIA = {
+    # name: (density grid inside |z| < 1, extinction)
+    "thin-box": (s.box_grid(cells=(10, 10, 10), size=(2.0, 2.0, 1.0)), 0.6),
+    # Optical depth about 1.9 through the centre and smoothly varying: shadow rays towards delta lights
+    # track most of it exactly (the blocks' minorants) and ratio-track the rest (residual ratio tracking).
+    "gaussian-ball": (s.sampled_grid(lambda x, y, z: np.exp(-(x * x + y * y + z * z) / (2 * 0.3**2)), (16, 16, 16),
+                                     (-0.9, -0.9, -0.9), (0.9, 0.9, 0.9)), 2.5),
+}
+
+
+@pytest.mark.parametrize("light_name, medium_name", [(light, "thin-box") for light in SINGLE_SCATTERING_LIGHTS]
+                         + [("sun", "gaussian-ball"), ("point", "gaussian-ball")])
+def test_single_scattering_matches_quadrature(light_name, medium_name):
+    """A lit medium seen from above, single scattering only (max depth 1): the pixel radiance is
     ∫ T_cam σ_s p_HG(θ) E T_light dt, evaluated here by quadrature on the same density field."""
     light, incident = SINGLE_SCATTERING_LIGHTS[light_name]
-    sigma, albedo, g = 0.6, 0.7, 0.5
-    box = s.box_grid(cells=(10, 10, 10), size=(2.0, 2.0, 1.0))
+    box, sigma = SINGLE_SCATTERING_MEDIA[medium_name]
+    albedo, g = 0.7, 0.5
     scene = s.scene(s.ortho_camera(8, 8, scale=0.05), [s.medium(box, extinction=sigma, albedo=albedo, g=g)],
                     [light], spp=1024, max_depth=1, seed=7)
     film = render(scene).film

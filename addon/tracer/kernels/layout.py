@@ -50,6 +50,7 @@ class KernelScene(NamedTuple):
     majorant_shape: np.ndarray  # (M, 3)
     majorant_block: np.ndarray  # (M,) cells per block
     majorant_coeff: np.ndarray  # (M,) density_scale · max over λ of (extinction + excitation)
+    minorant_data: np.ndarray  # the blocks' minimum density, laid out as majorant_data
     density_scale: np.ndarray  # (M,)
     extinction: np.ndarray  # (M, GRID)
     excitation: np.ndarray  # (M, GRID) fluorophore absorption per unit density

@@ -47,6 +47,13 @@ def albedo(ks, m, raw_density, at):
 
 
 @shared
+def attenuation(rho, extinction, excitation):
+    """σ_t = σ_s + σ_a at density ρ (scaled) whatever the albedo: ρ·(extinction + excitation), the dye's
+    absorption included (as `collision_coefficients` splits it). Shadow rays need only this."""
+    return rho * (extinction + excitation)
+
+
+@shared
 def collision_coefficients(rho, extinction, albedo_value, excitation, fluorescence_strength, emission_pdf):
     """At density ρ (scaled) with a medium's spectra at a wavelength: (σ_s, σ_a, plain absorption, σ_fl).
     σ_t = ρ·extinction scatters the albedo's share of it; the rest, the plain absorption, and the dye's
@@ -81,5 +88,6 @@ def free_path(u, sigma_bar):
 @shared
 def null_fraction(sigma_bar, sigma_a, sigma_s):
     """σ_n / σ̄ with σ_n = max(0, σ̄ − σ_a − σ_s): a null collision's share of a tentative one, and ratio
-    tracking's factor on the transmittance."""
+    tracking's factor on the transmittance (residual ratio tracking: σ̄ and σ_t − σ_c of the residual,
+    with σ_s = 0)."""
     return np.maximum(0.0, sigma_bar - sigma_a - sigma_s) / sigma_bar

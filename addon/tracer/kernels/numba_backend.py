@@ -62,6 +62,7 @@ from .light_sampling import choose_light
 from .lookups import on_grid, table_at
 from .media import (
     albedo,
+    attenuation,
     collision_coefficients,
     density,
     free_path,
@@ -181,10 +182,13 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
 
 # One DDA per medium over its majorant blocks, in the medium's padded index space (`Tracker`): slots of
 # state_i[m] (the phase, then the cell and the step per axis) and of state_f[m] (the ray's span in the
-# block grid, the next boundary and the spacing of boundaries per axis, the ray in index space).
+# block grid, the next boundary and the spacing of boundaries per axis, the ray in index space; for
+# residual ratio tracking, the control density on the current segment, its integral along the ray so
+# far, and the density above the control at a tentative collision).
 PHASE, CELL, STEP, TRACKER_INTS = 0, 1, 4, 7
 BEFORE, INSIDE, DONE = 0, 1, 2  # phases: the ray has not entered the block grid yet, is in it, has left
-T_ENTRY, T_EXIT, T_NEXT, T_DELTA, ORIGIN, DIRECTION, TRACKER_FLOATS = 0, 1, 2, 5, 11, 14, 17
+T_ENTRY, T_EXIT, T_NEXT, T_DELTA, ORIGIN, DIRECTION, CONTROL, DEPTH, EXCESS, TRACKER_FLOATS = (
+    0, 1, 2, 5, 11, 14, 17, 18, 19, 20)
 
 
 @jit(inline="always")
@@ -256,18 +260,38 @@ def _tracker_boundary(tracker, m):
 
 
 @jit(inline="always")
+def _block(ks, tracker, m):
+    """Where medium m's current block is in `majorant_data` (and `minorant_data`)."""
+    state_i = tracker.state_i
+    shape = ks.majorant_shape[m]
+    return ks.majorant_offset[m] + (state_i[m, CELL] * shape[1] + state_i[m, CELL + 1]) * shape[2] + state_i[m, CELL + 2]
+
+
+@jit(inline="always")
 def _tracker_segment(ks, tracker):
     """(end of the current segment, combined majorant σ̄ on it)."""
-    state_i = tracker.state_i
     t_end = INF
     sigma = 0.0
     for m in range(ks.density_scale.shape[0]):
         t_end = min(t_end, _tracker_boundary(tracker, m))
-        if state_i[m, PHASE] == INSIDE:
-            shape = ks.majorant_shape[m]
-            index = (state_i[m, CELL] * shape[1] + state_i[m, CELL + 1]) * shape[2] + state_i[m, CELL + 2]
-            sigma += ks.majorant_data[ks.majorant_offset[m] + index] * ks.majorant_coeff[m]
+        if tracker.state_i[m, PHASE] == INSIDE:
+            sigma += ks.majorant_data[_block(ks, tracker, m)] * ks.majorant_coeff[m]
     return t_end, sigma
+
+
+@jit(inline="always")
+def _tracker_control(ks, tracker, residual):
+    """Residual ratio tracking's control on the current segment: each medium's block minorant (scaled
+    density; 0 outside its blocks, or everywhere without `residual`) into its CONTROL slot. Returns the
+    control's share of the combined majorant σ̄ (Σ minorant · majorant_coeff)."""
+    share = 0.0
+    for m in range(ks.density_scale.shape[0]):
+        control = 0.0
+        if residual and tracker.state_i[m, PHASE] == INSIDE:
+            control = ks.minorant_data[_block(ks, tracker, m)]
+        tracker.state_f[m, CONTROL] = control * ks.density_scale[m]
+        share += control * ks.majorant_coeff[m]
+    return share
 
 
 @jit(inline="always")
@@ -515,41 +539,95 @@ def _path_xyz(ks, n, path):
 # ----------------------------------------------------------------------------- transport
 
 @jit(inline="always")
-def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker):
+def _control_depth(ks, tracker, spec, i):
+    """The control's optical depth so far along a shadow ray at wavelength i (residual ratio tracking)."""
+    depth = 0.0
+    for m in range(ks.density_scale.shape[0]):
+        depth += attenuation(tracker.state_f[m, DEPTH], spec[m, SPEC_EXTINCTION, i], spec[m, SPEC_EXCITATION, i])
+    return depth
+
+
+@jit(inline="always")
+def _faint_shadow_survives(ks, n, path, light, tracker, residual):
+    """Russian roulette on a faint shadow ray (every transmittance below SHADOW_ROULETTE_BELOW, bounded
+    with the control's least optical depth): unbiased, and stops long walks through dense media. False
+    when the ray stops (its transmittance 0)."""
+    transmittance = light.transmittance
+    largest, least_depth = 0.0, INF
+    for i in range(n):
+        largest = max(largest, transmittance[i])
+        if residual:
+            least_depth = min(least_depth, _control_depth(ks, tracker, path.spec, i))
+    if largest == 0.0:
+        return False
+    if residual:
+        largest *= math.exp(-least_depth)
+    if largest >= SHADOW_ROULETTE_BELOW:
+        return True
+    if _next(path.stream) < SHADOW_ROULETTE_STOP:
+        for i in range(n):
+            transmittance[i] = 0.0
+        return False
+    for i in range(n):
+        transmittance[i] /= 1.0 - SHADOW_ROULETTE_STOP
+    return True
+
+
+@jit(inline="always")
+def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, tracker):
     """Ratio tracking along a shadow ray: fills `light.transmittance` (per λ) and `light.null_ratio`, the
-    product of the unidirectional null-event probabilities σ_n/σ̄ per λ (for MIS); `shadow` holds
-    the coefficients along the ray."""
-    transmittance, null_ratio = light.transmittance, light.null_ratio
+    product of the unidirectional null-event probabilities σ_n/σ̄ per λ (for MIS).
+
+    With `residual` (towards delta lights, whose MIS needs no `null_ratio`): residual ratio tracking
+    (Novák et al. 2014). Each block's minorant, the control, is integrated exactly (`DEPTH`), and only
+    the rest is ratio-tracked, against the residual majorant σ̄ − σ_c: in a smooth medium few tentative
+    collisions and little variance."""
+    transmittance, null_ratio, state_f = light.transmittance, light.null_ratio, tracker.state_f
     for i in range(n):
         transmittance[i] = 1.0
         null_ratio[i] = 1.0
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, tracker)
+    for m in range(ks.density_scale.shape[0]):
+        state_f[m, DEPTH] = 0.0
     t = 0.0
     while True:
-        t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t)
-        if t == INF:
-            return
-        _coefficients(ks, ox + t * dx, oy + t * dy, oz + t * dz, path.lams, path.spec, n, shadow)
-        largest = 0.0
-        for i in range(n):
-            ratio = null_fraction(sigma_bar, shadow.sigma_a[i], shadow.sigma_s[i])
-            transmittance[i] *= ratio
-            null_ratio[i] *= ratio
-            largest = max(largest, transmittance[i])
-        if largest == 0.0:
-            return
-        if largest < SHADOW_ROULETTE_BELOW:
-            # Russian roulette on faint shadow rays: unbiased, and stops long walks through dense media.
-            if _next(path.stream) < SHADOW_ROULETTE_STOP:
-                for i in range(n):
-                    transmittance[i] = 0.0
-                return
+        t_end, sigma_bar = _tracker_segment(ks, tracker)
+        if t_end == INF:
+            break
+        control = _tracker_control(ks, tracker, residual)
+        rate = sigma_bar - control
+        while True:
+            t_next = t_end
+            if rate > 0.0:
+                t_next = min(t + free_path(_next(path.stream), rate), t_end)
+            for m in range(ks.density_scale.shape[0]):
+                state_f[m, DEPTH] += state_f[m, CONTROL] * (t_next - t)
+            t = t_next
+            if t == t_end:
+                if control > 0.0 and not _faint_shadow_survives(ks, n, path, light, tracker, residual):
+                    return
+                break
+            px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+            for m in range(ks.density_scale.shape[0]):
+                state_f[m, EXCESS] = density(ks, m, px, py, pz) * ks.density_scale[m] - state_f[m, CONTROL]
             for i in range(n):
-                transmittance[i] /= 1.0 - SHADOW_ROULETTE_STOP
+                excess = 0.0
+                for m in range(ks.density_scale.shape[0]):
+                    excess += attenuation(state_f[m, EXCESS], path.spec[m, SPEC_EXTINCTION, i],
+                                          path.spec[m, SPEC_EXCITATION, i])
+                ratio = null_fraction(rate, excess, 0.0)
+                transmittance[i] *= ratio
+                null_ratio[i] *= ratio
+            if not _faint_shadow_survives(ks, n, path, light, tracker, residual):
+                return
+        _tracker_advance(ks, tracker, t_end)
+    if residual:
+        for i in range(n):
+            transmittance[i] *= math.exp(-_control_depth(ks, tracker, path.spec, i))
 
 
 @jit(inline="always")
-def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, shadow, light, tracker):
+def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, light, tracker):
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
     transmittance, MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
     chosen = choose_light(ks.light_pmf, _next(path.stream))
@@ -568,7 +646,7 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, shadow, 
             any_light = True
     if not any_light:
         return
-    _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, n, path, shadow, light, tracker)
+    _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, delta, n, path, light, tracker)
     light_pdf = ks.light_pmf[chosen] * direction_pdf
     for i in range(n):
         light.r_l[i] = path.r_u[i] * light_pdf
@@ -752,7 +830,7 @@ def _survives_roulette(ks, depth, n, path):
 
 
 @jit(inline="always")
-def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, shadow, light, tracker, fl):
+def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, light, tracker, fl):
     """Transport from a camera ray, or (`emitted`) from an isotropic fluorescent emission at (ox, oy, oz)
     at vertex `depth`: collects the radiance per wavelength in `path.radiance` and offers fluorescent
     sources to `fl`."""
@@ -761,7 +839,7 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, shad
     while True:
         if at_vertex:
             if ks.light_kind.shape[0] > 0:
-                _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, n, path, vertex, shadow, light, tracker)
+                _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, n, path, vertex, light, tracker)
             dx, dy, dz = _sample_phase(ks, dx, dy, dz, emitted, n, path, vertex, light)
             if dx == 0.0 and dy == 0.0 and dz == 0.0:
                 return
@@ -783,7 +861,7 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, shad
 
 
 @jit(inline="always")
-def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, fl):
+def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl):
     """Transport of one path from a camera ray, then of its fluorescent sub-paths one after another, all
     through the one `_transport` below (inlined once, not once per kind of path): collects the path's
     radiance per camera wavelength in `path.radiance`."""
@@ -791,7 +869,7 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, 
         fl.total[j] = 0.0
     depth, emitted, count = 0, False, n
     while True:
-        _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, count, path, vertex, shadow, light, tracker, fl)
+        _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, count, path, vertex, light, tracker, fl)
         k, weight = _chosen_source(path, fl)
         for i in range(n):
             if emitted:  # a sub-path: its radiance at λ_in, then the weight of the next one
@@ -815,13 +893,13 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
     and `sum_sq`. The path's buffers are made once for them all: each allocation updates Numba's global
     allocation counters atomically, which threads contend for."""
     media = max(ks.density_scale.shape[0], 1)
-    path, vertex, shadow = _new_path(media), _new_coefficients(media), _new_coefficients(media)
+    path, vertex = _new_path(media), _new_coefficients(media)
     light, tracker, fl = _new_light_sample(), _new_tracker(media), _new_fluorescent()
     for index in range(first, last):
         row, column = index // tile_width, index % tile_width
         px, py = x0 + column, y0 + row
         sx, sy, sz, qx, qy, qz = _render_samples(ks, px, py, py * ks.width + px, sample_begin, sample_end, seed, band,
-                                                 path, vertex, shadow, light, tracker, fl)
+                                                 path, vertex, light, tracker, fl)
         sum_xyz[row, column, 0] += sx
         sum_xyz[row, column, 1] += sy
         sum_xyz[row, column, 2] += sz
@@ -831,14 +909,12 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
 
 
 @jit
-def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, shadow, light, tracker,
-                    fl):
+def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, light, tracker, fl):
     """Samples [sample_begin, sample_end) of one pixel, (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z²), in the path's
     buffers (`_render_pixels` makes them). The scene and the buffers, which the caller keeps
     alive, are borrowed (`_borrowed`): the loop below then updates no reference counts."""
-    ks, path, vertex, shadow, light, tracker, fl = (_borrowed(ks), _borrowed(path), _borrowed(vertex),
-                                                    _borrowed(shadow), _borrowed(light), _borrowed(tracker),
-                                                    _borrowed(fl))
+    ks, path, vertex, light, tracker, fl = (_borrowed(ks), _borrowed(path), _borrowed(vertex), _borrowed(light),
+                                            _borrowed(tracker), _borrowed(fl))
     n = ks.wavelengths_per_path
     path.stream[2] = pixel_key(seed, band, pixel)
     sx, sy, sz, qx, qy, qz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -848,7 +924,7 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
         path.stream[3] = sample
         _sample_wavelengths(ks, n, path)
         ox, oy, oz, dx, dy, dz = camera_ray(ks, px, py, _next(path.stream), _next(path.stream))
-        _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, shadow, light, tracker, fl)
+        _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl)
         x, y, z = _path_xyz(ks, n, path)
         sx, sy, sz = sx + x, sy + y, sz + z
         qx, qy, qz = qx + x * x, qy + y * y, qz + z * z

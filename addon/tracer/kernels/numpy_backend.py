@@ -185,17 +185,32 @@ def _tracker_boundary(tracker):
     return np.where(tracker.phase == 0, tracker.t_entry, np.where(tracker.phase == 1, inside, INF))
 
 
+def _blocks(ks, tracker):
+    """(rays, media): where each medium's current block is in `majorant_data` (and `minorant_data`)."""
+    shape = ks.majorant_shape
+    cell = np.minimum(np.maximum(tracker.cell, 0), shape - 1)
+    return ks.majorant_offset + (cell[..., 0] * shape[:, 1] + cell[..., 1]) * shape[:, 2] + cell[..., 2]
+
+
 def _tracker_segment(ks, tracker):
     """(end of each ray's current segment, combined majorant σ̄ on it)."""
     t_end = _tracker_boundary(tracker).min(axis=1, initial=INF)
-    shape = ks.majorant_shape
-    cell = np.minimum(np.maximum(tracker.cell, 0), shape - 1)
-    index = ks.majorant_offset + (cell[..., 0] * shape[:, 1] + cell[..., 1]) * shape[:, 2] + cell[..., 2]
-    majorant = ks.majorant_data[index] * ks.majorant_coeff
+    majorant = ks.majorant_data[_blocks(ks, tracker)] * ks.majorant_coeff
     sigma = np.zeros(len(tracker))
-    for m in range(shape.shape[0]):
+    for m in range(ks.majorant_shape.shape[0]):
         sigma = sigma + np.where(tracker.phase[:, m] == 1, majorant[:, m], 0.0)
     return t_end, sigma
+
+
+def _tracker_control(ks, tracker, residual):
+    """Residual ratio tracking's control on each ray's current segment: (rays, media) each medium's block
+    minorant (scaled density; 0 outside its blocks, and for the rays not in the mask `residual`), and the
+    control's share of the combined majorant σ̄ (Σ minorant · majorant_coeff)."""
+    minorant = np.where((tracker.phase == 1) & residual[:, None], ks.minorant_data[_blocks(ks, tracker)], 0.0)
+    share = np.zeros(len(tracker))
+    for m in range(ks.majorant_shape.shape[0]):
+        share = share + minorant[:, m] * ks.majorant_coeff[m]
+    return minorant * ks.density_scale, share
 
 
 def _tracker_advance(ks, tracker, moving, t_end):
@@ -219,31 +234,45 @@ def _tracker_advance(ks, tracker, moving, t_end):
         tracker.phase[rays[gone], media[gone]] = 2
 
 
-def _track(ks, paths, rows, origins, directions, t_max, collide):
+def _track(ks, paths, rows, origins, directions, t_max, collide, residual=None, travel=None):
     """Tentative collisions along rays against the majorant (delta and ratio tracking share this).
 
     Ray k belongs to path `rows[k]` and draws its free-flight distances from that path's stream.
     `collide(rays, points, sigma_bar)` handles the rays (indices) that have a tentative collision and
-    returns which of them stop there; a ray also stops when it leaves every medium."""
+    returns which of them stop there; a ray also stops when it leaves every medium.
+
+    Residual ratio tracking: the rays in mask `residual` draw against σ̄ less their control
+    (`_tracker_control`), and `travel(rays, dt, control, crossing)` hears of each step before
+    `collide`: the rays that move by dt (0 for those that leave), their control, and which of them reach
+    their segment's end; it returns which of those stop there."""
     flight = _tracker_start(ks, origins, directions, t_max)
     flight.ray = np.arange(origins.shape[0])
     flight.t = np.zeros(origins.shape[0])
+    if travel is not None:
+        flight.residual = residual
     while len(flight):
         t_end, sigma_bar = _tracker_segment(ks, flight)
+        rate = sigma_bar
+        if travel is not None:
+            control, share = _tracker_control(ks, flight, flight.residual)
+            rate = sigma_bar - share
         escaped = t_end == INF
-        drawing = ~escaped & (sigma_bar > 0.0)
+        drawing = ~escaped & (rate > 0.0)
         step = np.zeros(len(flight))
-        step[drawing] = media.free_path(_draw(paths, rows[flight.ray[drawing]]), sigma_bar[drawing])
+        step[drawing] = media.free_path(_draw(paths, rows[flight.ray[drawing]]), rate[drawing])
         crossing = ~escaped & (~drawing | (flight.t + step >= t_end))
         colliding = drawing & ~crossing
-        flight.t = np.where(crossing, t_end, np.where(colliding, flight.t + step, flight.t))
-        _tracker_advance(ks, flight, crossing, t_end)
+        t = np.where(crossing, t_end, np.where(colliding, flight.t + step, flight.t))
         stop = escaped
+        if travel is not None:
+            stop = stop | travel(flight.ray, t - flight.t, control, crossing & (share > 0.0))
+        flight.t = t
+        _tracker_advance(ks, flight, crossing, t_end)
         hits = np.flatnonzero(colliding)
         if hits.size:
             rays = flight.ray[hits]
             points = origins[rays] + flight.t[hits, None] * directions[rays]
-            stop[hits] = collide(rays, points, sigma_bar[hits])
+            stop[hits] = collide(rays, points, rate[hits])
         if stop.any():
             flight = flight.take(~stop)
 
@@ -476,20 +505,34 @@ def _escape(ks, paths, radiance):
         radiance[paths.id] += paths.beta * light_radiance / mean_r[:, None]
 
 
-def _transmittance(ks, paths, rows, origins, directions, t_max, lams):
+def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
     """Ratio tracking along shadow rays (ray k from path rows[k]): the transmittance per wavelength and
-    the product of the unidirectional null-event probabilities σ_n/(σ̄ + σ_fl) (for MIS). Faint rays
-    (every transmittance below SHADOW_ROULETTE_BELOW) play Russian roulette at each tentative collision."""
+    the product of the unidirectional null-event probabilities σ_n/σ̄ (for MIS). The rays in mask
+    `residual` (towards delta lights) use residual ratio tracking: their blocks' minorants are integrated
+    exactly (`depth`) and only the rest is ratio-tracked. Faint rays (every transmittance, bounded with
+    the least control depth, below SHADOW_ROULETTE_BELOW) play Russian roulette at each tentative
+    collision and, where a control acts, at each segment's end."""
+    count, n = lams.shape
     transmittance = np.ones(lams.shape)
     null_ratio = np.ones(lams.shape)
+    extinction = np.stack([table_at(ks.extinction, m, on_grid(lams)) for m in range(ks.density_scale.shape[0])], 1)
+    excitation = np.stack([table_at(ks.excitation, m, on_grid(lams)) for m in range(ks.density_scale.shape[0])], 1)
+    depth = np.zeros((count, ks.density_scale.shape[0]))  # the control's integral along each ray so far
+    control_now = np.zeros(depth.shape)
 
-    def collide(rays, points, sigma_bar):
-        c = _coefficients(ks, points, lams[rays])
-        bar = sigma_bar[:, None]
-        ratio = media.null_fraction(bar, c.sigma_a, c.sigma_s)
-        transmittance[rays] *= ratio
-        null_ratio[rays] *= ratio
+    def control_depth(rays):
+        """(rays, wavelengths): the control's optical depth so far."""
+        total = np.zeros((rays.size, n))
+        for m in range(depth.shape[1]):
+            total = total + media.attenuation(depth[rays, m, None], extinction[rays, m], excitation[rays, m])
+        return total
+
+    def faint_survives(rays):
+        """Russian roulette on the faint rays among `rays`; which of them stop."""
         largest = np.max(transmittance[rays], axis=1, initial=0.0)
+        bounded = residual[rays]
+        least = np.min(control_depth(rays[bounded]), axis=1, initial=INF)
+        largest[bounded] = largest[bounded] * np.exp(-least)
         faint = np.flatnonzero((largest > 0.0) & (largest < SHADOW_ROULETTE_BELOW))
         lost = _draw(paths, rows[rays[faint]]) < SHADOW_ROULETTE_STOP
         transmittance[rays[faint[lost]]] = 0.0
@@ -498,7 +541,26 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams):
         stop[faint[lost]] = True
         return stop
 
-    _track(ks, paths, rows, origins, directions, t_max, collide)
+    def travel(rays, dt, control, crossing):
+        depth[rays] += control * dt[:, None]
+        control_now[rays] = control
+        stop = np.zeros(rays.size, dtype=bool)
+        ends = np.flatnonzero(crossing)
+        stop[ends] = faint_survives(rays[ends])
+        return stop
+
+    def collide(rays, points, rate):
+        excess = np.zeros((rays.size, n))
+        for m in range(depth.shape[1]):
+            rho = media.density(ks, m, *_columns(points)) * ks.density_scale[m] - control_now[rays, m]
+            excess = excess + media.attenuation(rho[:, None], extinction[rays, m], excitation[rays, m])
+        ratio = media.null_fraction(rate[:, None], excess, 0.0)
+        transmittance[rays] *= ratio
+        null_ratio[rays] *= ratio
+        return faint_survives(rays)
+
+    _track(ks, paths, rows, origins, directions, t_max, collide, residual, travel)
+    transmittance[residual] *= np.exp(-control_depth(np.flatnonzero(residual)))
     return transmittance, null_ratio
 
 
@@ -517,7 +579,7 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
     if rows.size == 0:
         return
     transmittance, null_ratio = _transmittance(ks, paths, rows, paths.o[rows], sample.w[rows],
-                                               sample.distance[rows], paths.lams[rows])
+                                               sample.distance[rows], paths.lams[rows], sample.delta[rows])
     r_u, phase_values = paths.r_u[rows], phase_values[rows]
     light_pdf = (ks.light_pmf[lights[rows]] * sample.pdf[rows])[:, None]
     r_u_light = np.where(sample.delta[rows, None], 0.0, r_u * phase_values * null_ratio)
