@@ -3,7 +3,8 @@ and the tests' cameras, which look straight down the z axis at the origin."""
 
 import numpy as np
 
-from addon.tracer.builders import box_grid, environment, medium, scene, smooth_ramp, sun  # noqa: F401 (the tests' scenes)
+from addon.tracer.builders import (  # noqa: F401 (the tests' scenes)
+    box_grid, environment, medium, sampled_grid, scene, smooth_ramp, sun)
 from addon.tracer.scene import Camera
 
 
