@@ -17,8 +17,9 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   reservoir's collision: one wavelength λ_in drawn ∝ excitation(λ_in), an isotropic direction; its
   radiance, times the collision's weight ÷ its mixture probability and each camera wavelength's share,
   is added to the path's. The sub-path's own reservoirs give the next (cascades, no recursion).
-- Next-event estimation at every real scattering vertex with ratio-tracked transmittance, combined
-  with phase sampling by MIS for environment and finite suns.
+- Next-event estimation at every real scattering vertex with ratio-tracked transmittance (residual
+  ratio tracking towards delta lights), combined with phase sampling by MIS for environment and finite
+  suns.
 - Thermal emission σ_a·Planck(T) is collected at every tentative collision.
 
 Structure: `render_tile` runs runs of pixels in parallel; `_render_pixels` makes a run's buffers once
@@ -549,18 +550,19 @@ def _control_depth(ks, tracker, spec, i):
 
 @jit(inline="always")
 def _faint_shadow_survives(ks, n, path, light, tracker, residual):
-    """Russian roulette on a faint shadow ray (every transmittance below SHADOW_ROULETTE_BELOW, bounded
-    with the control's least optical depth): unbiased, and stops long walks through dense media. False
-    when the ray stops (its transmittance 0)."""
+    """Russian roulette on a faint shadow ray (every transmittance below SHADOW_ROULETTE_BELOW; with
+    `residual`, the ratio-tracked factors times the control's transmittance at its least optical depth):
+    unbiased, and stops long walks through dense media. False when the ray stops (its transmittance 0)."""
     transmittance = light.transmittance
-    largest, least_depth = 0.0, INF
+    largest = 0.0
     for i in range(n):
         largest = max(largest, transmittance[i])
-        if residual:
-            least_depth = min(least_depth, _control_depth(ks, tracker, path.spec, i))
     if largest == 0.0:
         return False
-    if residual:
+    if residual and largest >= SHADOW_ROULETTE_BELOW:
+        least_depth = INF
+        for i in range(n):
+            least_depth = min(least_depth, _control_depth(ks, tracker, path.spec, i))
         largest *= math.exp(-least_depth)
     if largest >= SHADOW_ROULETTE_BELOW:
         return True
@@ -594,8 +596,7 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
         t_end, sigma_bar = _tracker_segment(ks, tracker)
         if t_end == INF:
             break
-        control = _tracker_control(ks, tracker, residual)
-        rate = sigma_bar - control
+        rate = sigma_bar - _tracker_control(ks, tracker, residual)
         while True:
             t_next = t_end
             if rate > 0.0:
@@ -604,8 +605,6 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
                 state_f[m, DEPTH] += state_f[m, CONTROL] * (t_next - t)
             t = t_next
             if t == t_end:
-                if control > 0.0 and not _faint_shadow_survives(ks, n, path, light, tracker, residual):
-                    return
                 break
             px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
             for m in range(ks.density_scale.shape[0]):

@@ -242,9 +242,8 @@ def _track(ks, paths, rows, origins, directions, t_max, collide, residual=None, 
     returns which of them stop there; a ray also stops when it leaves every medium.
 
     Residual ratio tracking: the rays in mask `residual` draw against σ̄ less their control
-    (`_tracker_control`), and `travel(rays, dt, control, crossing)` hears of each step before
-    `collide`: the rays that move by dt (0 for those that leave), their control, and which of them reach
-    their segment's end; it returns which of those stop there."""
+    (`_tracker_control`), and `travel(rays, dt, control)` hears of each step before `collide`: the rays
+    that move by dt (0 for those that leave) and their control."""
     flight = _tracker_start(ks, origins, directions, t_max)
     flight.ray = np.arange(origins.shape[0])
     flight.t = np.zeros(origins.shape[0])
@@ -263,11 +262,11 @@ def _track(ks, paths, rows, origins, directions, t_max, collide, residual=None, 
         crossing = ~escaped & (~drawing | (flight.t + step >= t_end))
         colliding = drawing & ~crossing
         t = np.where(crossing, t_end, np.where(colliding, flight.t + step, flight.t))
-        stop = escaped
         if travel is not None:
-            stop = stop | travel(flight.ray, t - flight.t, control, crossing & (share > 0.0))
+            travel(flight.ray, t - flight.t, control)
         flight.t = t
         _tracker_advance(ks, flight, crossing, t_end)
+        stop = escaped
         hits = np.flatnonzero(colliding)
         if hits.size:
             rays = flight.ray[hits]
@@ -511,7 +510,7 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
     `residual` (towards delta lights) use residual ratio tracking: their blocks' minorants are integrated
     exactly (`depth`) and only the rest is ratio-tracked. Faint rays (every transmittance, bounded with
     the least control depth, below SHADOW_ROULETTE_BELOW) play Russian roulette at each tentative
-    collision and, where a control acts, at each segment's end."""
+    collision."""
     count, n = lams.shape
     transmittance = np.ones(lams.shape)
     null_ratio = np.ones(lams.shape)
@@ -530,7 +529,7 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
     def faint_survives(rays):
         """Russian roulette on the faint rays among `rays`; which of them stop."""
         largest = np.max(transmittance[rays], axis=1, initial=0.0)
-        bounded = residual[rays]
+        bounded = np.flatnonzero(residual[rays] & (largest >= SHADOW_ROULETTE_BELOW))
         least = np.min(control_depth(rays[bounded]), axis=1, initial=INF)
         largest[bounded] = largest[bounded] * np.exp(-least)
         faint = np.flatnonzero((largest > 0.0) & (largest < SHADOW_ROULETTE_BELOW))
@@ -541,13 +540,9 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
         stop[faint[lost]] = True
         return stop
 
-    def travel(rays, dt, control, crossing):
+    def travel(rays, dt, control):
         depth[rays] += control * dt[:, None]
         control_now[rays] = control
-        stop = np.zeros(rays.size, dtype=bool)
-        ends = np.flatnonzero(crossing)
-        stop[ends] = faint_survives(rays[ends])
-        return stop
 
     def collide(rays, points, rate):
         excess = np.zeros((rays.size, n))
