@@ -281,14 +281,14 @@ def _tracker_segment(ks, tracker):
 
 
 @jit(inline="always")
-def _tracker_control(ks, tracker, residual):
+def _tracker_control(ks, tracker):
     """Residual ratio tracking's control on the current segment: each medium's block minorant (scaled
-    density; 0 outside its blocks, or everywhere without `residual`) into its CONTROL slot. Returns the
-    control's share of the combined majorant σ̄ (Σ minorant · majorant_coeff)."""
+    density; 0 outside its blocks) into its CONTROL slot. Returns the control's share of the combined
+    majorant σ̄ (Σ minorant · majorant_coeff)."""
     share = 0.0
     for m in range(ks.density_scale.shape[0]):
         control = 0.0
-        if residual and tracker.state_i[m, PHASE] == INSIDE:
+        if tracker.state_i[m, PHASE] == INSIDE:
             control = ks.minorant_data[_block(ks, tracker, m)]
         tracker.state_f[m, CONTROL] = control * ks.density_scale[m]
         share += control * ks.majorant_coeff[m]
@@ -590,19 +590,21 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
         null_ratio[i] = 1.0
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, tracker)
     for m in range(ks.density_scale.shape[0]):
+        state_f[m, CONTROL] = 0.0  # no control: plain ratio tracking
         state_f[m, DEPTH] = 0.0
     t = 0.0
     while True:
         t_end, sigma_bar = _tracker_segment(ks, tracker)
         if t_end == INF:
             break
-        rate = sigma_bar - _tracker_control(ks, tracker, residual)
+        rate = sigma_bar - _tracker_control(ks, tracker) if residual else sigma_bar
         while True:
             t_next = t_end
             if rate > 0.0:
                 t_next = min(t + free_path(_next(path.stream), rate), t_end)
-            for m in range(ks.density_scale.shape[0]):
-                state_f[m, DEPTH] += state_f[m, CONTROL] * (t_next - t)
+            if residual:
+                for m in range(ks.density_scale.shape[0]):
+                    state_f[m, DEPTH] += state_f[m, CONTROL] * (t_next - t)
             t = t_next
             if t == t_end:
                 break
