@@ -45,9 +45,9 @@ def density(ks, m, px, py, pz):
 
 
 @njit
-def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker):
+def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, tracker):
     ks.bench_counters[_bench_thread_id() * 8 + 1] += 1
-    _transmittance_uncounted(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker)
+    _transmittance_uncounted(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, tracker)
 
 
 @njit
@@ -60,7 +60,7 @@ CountingScene = namedtuple("CountingScene", KernelScene._fields + ("bench_counte
 # The lines the wrappers mirror (the call of the shared `density`, the definitions of the others): a changed
 # signature refuses the copy instead of failing to compile.
 _CHECKED = ("rho = density(ks, m, px, py, pz) * ks.density_scale[m]",
-            "def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, n, path, shadow, light, tracker):",
+            "def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, tracker):",
             "def _tracker_advance(ks, tracker, t_end):")
 
 
