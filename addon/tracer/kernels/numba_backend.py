@@ -269,30 +269,25 @@ def _block(ks, tracker, m):
 
 
 @jit(inline="always")
-def _tracker_segment(ks, tracker):
-    """(end of the current segment, combined majorant σ̄ on it)."""
+def _tracker_segment(ks, tracker, residual):
+    """(end of the current segment, the rate to track against on it): the combined majorant σ̄, or with
+    `residual` the residual majorant σ̄ − σ_c, each medium's control σ_c (its block's minorant, scaled
+    density; 0 outside its blocks) then in its CONTROL slot."""
     t_end = INF
-    sigma = 0.0
+    rate = 0.0
     for m in range(ks.density_scale.shape[0]):
         t_end = min(t_end, _tracker_boundary(tracker, m))
         if tracker.state_i[m, PHASE] == INSIDE:
-            sigma += ks.majorant_data[_block(ks, tracker, m)] * ks.majorant_coeff[m]
-    return t_end, sigma
-
-
-@jit(inline="always")
-def _tracker_control(ks, tracker):
-    """Residual ratio tracking's control on the current segment: each medium's block minorant (scaled
-    density; 0 outside its blocks) into its CONTROL slot. Returns the control's share of the combined
-    majorant σ̄ (Σ minorant · majorant_coeff)."""
-    share = 0.0
-    for m in range(ks.density_scale.shape[0]):
-        control = 0.0
-        if tracker.state_i[m, PHASE] == INSIDE:
-            control = ks.minorant_data[_block(ks, tracker, m)]
-        tracker.state_f[m, CONTROL] = control * ks.density_scale[m]
-        share += control * ks.majorant_coeff[m]
-    return share
+            block = _block(ks, tracker, m)
+            bound = np.float64(ks.majorant_data[block])
+            if residual:
+                control = np.float64(ks.minorant_data[block])
+                tracker.state_f[m, CONTROL] = control * ks.density_scale[m]
+                bound -= control
+            rate += bound * ks.majorant_coeff[m]
+        elif residual:
+            tracker.state_f[m, CONTROL] = 0.0
+    return t_end, rate
 
 
 @jit(inline="always")
@@ -325,7 +320,7 @@ def _tentative_collision(ks, stream, tracker, t):
     """Delta tracking from ray parameter t: the next tentative collision (t, σ̄ there), or (INF, 0)
     when the ray leaves every medium (or passes the tracker's t_max)."""
     while True:
-        t_end, sigma_bar = _tracker_segment(ks, tracker)
+        t_end, sigma_bar = _tracker_segment(ks, tracker, False)
         if t_end == INF:
             return INF, 0.0
         if sigma_bar > 0.0:
@@ -563,7 +558,8 @@ def _faint_shadow_survives(ks, n, path, light, tracker, residual):
         least_depth = INF
         for i in range(n):
             least_depth = min(least_depth, _control_depth(ks, tracker, path.spec, i))
-        largest *= math.exp(-least_depth)
+        if least_depth > 0.0:
+            largest *= math.exp(-least_depth)
     if largest >= SHADOW_ROULETTE_BELOW:
         return True
     if _next(path.stream) < SHADOW_ROULETTE_STOP:
@@ -594,10 +590,9 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
         state_f[m, DEPTH] = 0.0
     t = 0.0
     while True:
-        t_end, sigma_bar = _tracker_segment(ks, tracker)
+        t_end, rate = _tracker_segment(ks, tracker, residual)
         if t_end == INF:
             break
-        rate = sigma_bar - _tracker_control(ks, tracker) if residual else sigma_bar
         while True:
             t_next = t_end
             if rate > 0.0:

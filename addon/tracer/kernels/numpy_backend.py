@@ -192,25 +192,25 @@ def _blocks(ks, tracker):
     return ks.majorant_offset + (cell[..., 0] * shape[:, 1] + cell[..., 1]) * shape[:, 2] + cell[..., 2]
 
 
-def _tracker_segment(ks, tracker):
-    """(end of each ray's current segment, combined majorant σ̄ on it)."""
+def _tracker_segment(ks, tracker, residual=None):
+    """(end of each ray's current segment, the rate to track against on it, control): the rate is the
+    combined majorant σ̄, or for the rays in mask `residual` the residual majorant σ̄ − σ_c, with
+    (rays, media) each medium's control σ_c, its block's minorant (scaled density; 0 outside its blocks
+    and for other rays)."""
     t_end = _tracker_boundary(tracker).min(axis=1, initial=INF)
-    majorant = ks.majorant_data[_blocks(ks, tracker)] * ks.majorant_coeff
-    sigma = np.zeros(len(tracker))
+    blocks = _blocks(ks, tracker)
+    inside = tracker.phase == 1
+    bound = ks.majorant_data[blocks].astype(np.float64)
+    control = np.zeros(bound.shape)
+    if residual is not None:
+        minorant = np.where(inside & residual[:, None], ks.minorant_data[blocks].astype(np.float64), 0.0)
+        bound = bound - minorant
+        control = minorant * ks.density_scale
+    scaled = bound * ks.majorant_coeff
+    rate = np.zeros(len(tracker))
     for m in range(ks.majorant_shape.shape[0]):
-        sigma = sigma + np.where(tracker.phase[:, m] == 1, majorant[:, m], 0.0)
-    return t_end, sigma
-
-
-def _tracker_control(ks, tracker, residual):
-    """Residual ratio tracking's control on each ray's current segment: (rays, media) each medium's block
-    minorant (scaled density; 0 outside its blocks, and for the rays not in the mask `residual`), and the
-    control's share of the combined majorant σ̄ (Σ minorant · majorant_coeff)."""
-    minorant = np.where((tracker.phase == 1) & residual[:, None], ks.minorant_data[_blocks(ks, tracker)], 0.0)
-    share = np.zeros(len(tracker))
-    for m in range(ks.majorant_shape.shape[0]):
-        share = share + minorant[:, m] * ks.majorant_coeff[m]
-    return minorant * ks.density_scale, share
+        rate = rate + np.where(inside[:, m], scaled[:, m], 0.0)
+    return t_end, rate, control
 
 
 def _tracker_advance(ks, tracker, moving, t_end):
@@ -238,23 +238,19 @@ def _track(ks, paths, rows, origins, directions, t_max, collide, residual=None, 
     """Tentative collisions along rays against the majorant (delta and ratio tracking share this).
 
     Ray k belongs to path `rows[k]` and draws its free-flight distances from that path's stream.
-    `collide(rays, points, sigma_bar)` handles the rays (indices) that have a tentative collision and
-    returns which of them stop there; a ray also stops when it leaves every medium.
+    `collide(rays, points, rate)` handles the rays (indices) that have a tentative collision (drawn at that
+    rate: σ̄ there) and returns which of them stop there; a ray also stops when it leaves every medium.
 
     Residual ratio tracking: the rays in mask `residual` draw against σ̄ less their control
-    (`_tracker_control`), and `travel(rays, dt, control)` hears of each step before `collide`: the rays
+    (`_tracker_segment`), and `travel(rays, dt, control)` hears of each step before `collide`: the rays
     that move by dt (0 for those that leave) and their control."""
     flight = _tracker_start(ks, origins, directions, t_max)
     flight.ray = np.arange(origins.shape[0])
     flight.t = np.zeros(origins.shape[0])
-    if travel is not None:
+    if residual is not None:
         flight.residual = residual
     while len(flight):
-        t_end, sigma_bar = _tracker_segment(ks, flight)
-        rate = sigma_bar
-        if travel is not None:
-            control, share = _tracker_control(ks, flight, flight.residual)
-            rate = sigma_bar - share
+        t_end, rate, control = _tracker_segment(ks, flight, None if residual is None else flight.residual)
         escaped = t_end == INF
         drawing = ~escaped & (rate > 0.0)
         step = np.zeros(len(flight))
@@ -531,7 +527,7 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
         largest = np.max(transmittance[rays], axis=1, initial=0.0)
         bounded = np.flatnonzero(residual[rays] & (largest >= SHADOW_ROULETTE_BELOW))
         least = np.min(control_depth(rays[bounded]), axis=1, initial=INF)
-        largest[bounded] = largest[bounded] * np.exp(-least)
+        largest[bounded] = np.where(least > 0.0, largest[bounded] * np.exp(-least), largest[bounded])
         faint = np.flatnonzero((largest > 0.0) & (largest < SHADOW_ROULETTE_BELOW))
         lost = _draw(paths, rows[rays[faint]]) < SHADOW_ROULETTE_STOP
         transmittance[rays[faint[lost]]] = 0.0
