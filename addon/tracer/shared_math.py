@@ -8,11 +8,23 @@ Numba's InlineInlinables pass inlines any global with `targetoptions` {"inline":
 (what a dispatcher has), so the plain function gets both; it stays registered as jitable for any call
 the pass does not reach.
 
+`select(condition, a, b)` is the one choice such code makes on a path's values: NumPy's `where` on arrays,
+a plain conditional on a Numba kernel's scalars (where `np.where` would make a 0-d array).
+
 Without Numba installed the decorators change nothing, so the NumPy backend needs no compiler.
 """
 
+import numpy as np
+
+
+def select(condition, if_true, if_false):
+    """`if_true` where `condition` holds, else `if_false` (both are evaluated)."""
+    return np.where(condition, if_true, if_false)
+
+
 try:
-    from numba.extending import register_jitable as shared
+    from numba import types
+    from numba.extending import overload, register_jitable as shared
 except ImportError:  # the NumPy backend works without Numba
 
     def shared(function):
@@ -20,6 +32,12 @@ except ImportError:  # the NumPy backend works without Numba
 
     shared_inline = shared
 else:
+
+    @overload(select)
+    def _select_in_kernels(condition, if_true, if_false):
+        if all(isinstance(value, (types.Boolean, types.Number)) for value in (condition, if_true, if_false)):
+            return lambda condition, if_true, if_false: if_true if condition else if_false
+        return lambda condition, if_true, if_false: np.where(condition, if_true, if_false)
 
     def shared_inline(function):
         shared(function)

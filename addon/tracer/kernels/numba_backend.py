@@ -48,6 +48,7 @@ from numba.extending import intrinsic
 from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import INV_FOUR_PI, hg_sample_cos, rayleigh_sample_cos, sample_direction
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
+from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
     LIGHT_ENVIRONMENT,
@@ -202,19 +203,9 @@ def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, tracker):
         ldx, ldy, ldz = transform_vector(w2p, dx, dy, dz)
         block = ks.majorant_block[m]
         shape = ks.majorant_shape[m]
-        t0, t1 = t_min, t_max
-        for axis in range(3):
-            o = lox if axis == 0 else (loy if axis == 1 else loz)
-            d = ldx if axis == 0 else (ldy if axis == 1 else ldz)
-            upper = shape[axis] * block
-            if d == 0.0:
-                if o < 0.0 or o >= upper:
-                    t1 = -1.0
-                continue
-            ta, tb = (0.0 - o) / d, (upper - o) / d
-            if ta > tb:
-                ta, tb = tb, ta
-            t0, t1 = max(t0, ta), min(t1, tb)
+        t0, t1 = axis_span(lox, ldx, shape[0] * block, t_min, t_max)
+        t0, t1 = axis_span(loy, ldy, shape[1] * block, t0, t1)
+        t0, t1 = axis_span(loz, ldz, shape[2] * block, t0, t1)
         state_i[m, PHASE] = DONE if t0 >= t1 else BEFORE
         state_f[m, T_ENTRY], state_f[m, T_EXIT] = t0, t1
         state_f[m, ORIGIN], state_f[m, ORIGIN + 1], state_f[m, ORIGIN + 2] = lox, loy, loz
@@ -224,27 +215,11 @@ def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, tracker):
 @jit(inline="always")
 def _tracker_enter(ks, m, tracker):
     state_i, state_f = tracker.state_i, tracker.state_f
-    t = state_f[m, T_ENTRY]
-    block = ks.majorant_block[m]
-    shape = ks.majorant_shape[m]
     for axis in range(3):
-        o = state_f[m, ORIGIN + axis]
-        d = state_f[m, DIRECTION + axis]
-        q = o + t * d
-        cell = min(max(int(math.floor(q / block)), 0), shape[axis] - 1)
-        state_i[m, CELL + axis] = cell
-        if d > 0.0:
-            state_i[m, STEP + axis] = 1
-            state_f[m, T_NEXT + axis] = ((cell + 1) * block - o) / d
-            state_f[m, T_DELTA + axis] = block / d
-        elif d < 0.0:
-            state_i[m, STEP + axis] = -1
-            state_f[m, T_NEXT + axis] = (cell * block - o) / d
-            state_f[m, T_DELTA + axis] = -block / d
-        else:
-            state_i[m, STEP + axis] = 0
-            state_f[m, T_NEXT + axis] = INF
-            state_f[m, T_DELTA + axis] = INF
+        cell, step, t_next, t_delta = axis_entry(state_f[m, ORIGIN + axis], state_f[m, DIRECTION + axis],
+                                                 state_f[m, T_ENTRY], ks.majorant_block[m], ks.majorant_shape[m, axis])
+        state_i[m, CELL + axis], state_i[m, STEP + axis] = cell, step
+        state_f[m, T_NEXT + axis], state_f[m, T_DELTA + axis] = t_next, t_delta
     state_i[m, PHASE] = INSIDE
 
 

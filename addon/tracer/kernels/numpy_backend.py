@@ -26,6 +26,7 @@ from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import INV_FOUR_PI, hg_sample_cos, rayleigh_sample_cos, sample_direction
 from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
+from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
 from .layout import LIGHT_ENVIRONMENT as ENVIRONMENT, LIGHT_SKY as SKY, LIGHT_SPOT as SPOT, LIGHT_SUN as SUN
@@ -149,15 +150,7 @@ def _tracker_start(ks, origins, directions, t_max):
         ld = _rows(transform_vector(ks.world_to_padded[m], *_columns(directions)), count)
         t0, t1 = np.zeros(count), np.broadcast_to(t_max, (count,)).astype(np.float64)
         for axis in range(3):
-            o, d = lo[:, axis], ld[:, axis]
-            upper = ks.majorant_shape[m, axis] * ks.majorant_block[m]
-            ta, tb = (0.0 - o) / d, (upper - o) / d
-            swap = ta > tb
-            ta, tb = np.where(swap, tb, ta), np.where(swap, ta, tb)
-            parallel = d == 0.0
-            outside = parallel & ((o < 0.0) | (o >= upper))
-            t0 = np.where(parallel, t0, np.maximum(t0, ta))
-            t1 = np.where(outside, -1.0, np.where(parallel, t1, np.minimum(t1, tb)))
+            t0, t1 = axis_span(lo[:, axis], ld[:, axis], ks.majorant_shape[m, axis] * ks.majorant_block[m], t0, t1)
         tracker.phase[:, m] = np.where(t0 >= t1, 2, 0)
         tracker.t_entry[:, m], tracker.t_exit[:, m] = t0, t1
         tracker.lo[:, m], tracker.ld[:, m] = lo, ld
@@ -166,16 +159,11 @@ def _tracker_start(ks, origins, directions, t_max):
 
 def _tracker_enter(ks, tracker, rays, media):
     """Put the DDAs of the (ray, medium) pairs `rays[k]`, `media[k]` into their first block."""
-    t = tracker.t_entry[rays, media][:, None]
-    block = ks.majorant_block[media][:, None]
-    o, d = tracker.lo[rays, media], tracker.ld[rays, media]
-    cell = np.minimum(np.maximum(np.floor((o + t * d) / block).astype(np.int64), 0), ks.majorant_shape[media] - 1)
-    up, down = d > 0.0, d < 0.0
-    tracker.cell[rays, media] = cell
-    tracker.step[rays, media] = np.where(up, 1, np.where(down, -1, 0))
-    tracker.t_next[rays, media] = np.where(up, ((cell + 1) * block - o) / d,
-                                           np.where(down, (cell * block - o) / d, INF))
-    tracker.t_delta[rays, media] = np.where(up, block / d, np.where(down, -block / d, INF))
+    cell, step, t_next, t_delta = axis_entry(tracker.lo[rays, media], tracker.ld[rays, media],
+                                             tracker.t_entry[rays, media][:, None],
+                                             ks.majorant_block[media][:, None], ks.majorant_shape[media])
+    tracker.cell[rays, media], tracker.step[rays, media] = cell, step
+    tracker.t_next[rays, media], tracker.t_delta[rays, media] = t_next, t_delta
     tracker.phase[rays, media] = 1
 
 
