@@ -1,10 +1,12 @@
 """Marks functions as shared math: plain NumPy-compatible code that the NumPy backend calls on arrays
 and that Numba kernels compile in place (`numba.extending.register_jitable`).
 
-`shared` compiles a function of its own, which LLVM inlines into its caller or calls; `shared_inline`
-has Numba inline it into each caller, for the trilinear look-up of the innermost loop, which LLVM would
-call. (Numba inlines such functions after typing, at a cost in compile time at every call site: the
-exception, not the rule.)
+`shared` compiles a function of its own, which LLVM inlines into its caller or calls. `shared_inline` has
+Numba inline the function's code into each caller before typing, as the kernel's `jit(inline="always")`
+helpers are: for the trilinear look-up of the innermost loop and the lights, which LLVM would call.
+Numba's InlineInlinables pass inlines any global with `targetoptions` {"inline": "always"} and a `py_func`
+(what a dispatcher has), so the plain function gets both; it stays registered as jitable for any call
+the pass does not reach.
 
 Without Numba installed the decorators change nothing, so the NumPy backend needs no compiler.
 """
@@ -20,4 +22,7 @@ except ImportError:  # the NumPy backend works without Numba
 else:
 
     def shared_inline(function):
-        return shared(inline="always")(function)  # a fresh decorator each time: register_jitable's keeps state
+        shared(function)
+        function.targetoptions = {"inline": "always"}
+        function.py_func = function
+        return function
