@@ -3,13 +3,14 @@ and that Numba kernels compile in place (`numba.extending.register_jitable`).
 
 `shared` compiles a function of its own, which LLVM inlines into its caller or calls. `shared_inline` has
 Numba inline the function's code into each caller before typing, as the kernel's `jit(inline="always")`
-helpers are: for the trilinear look-up of the innermost loop and the lights, which LLVM would call.
+helpers are: for the trilinear look-up of the innermost loop, the lights and the DDA, which LLVM would call.
 Numba's InlineInlinables pass inlines any global with `targetoptions` {"inline": "always"} and a `py_func`
 (what a dispatcher has), so the plain function gets both; it stays registered as jitable for any call
 the pass does not reach.
 
-`select(condition, a, b)` is the one choice such code makes on a path's values: NumPy's `where` on arrays,
-a plain conditional on a Numba kernel's scalars (where `np.where` would make a 0-d array).
+`select(condition, a, b)` chooses on a path's values where a product with a mask cannot (an operand that
+may be infinite or NaN, an integer result): NumPy's `where` on arrays, a plain conditional on a Numba
+kernel's scalars (where `np.where` would make a 0-d array).
 
 Without Numba installed the decorators change nothing, so the NumPy backend needs no compiler.
 """

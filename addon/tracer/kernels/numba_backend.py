@@ -51,16 +51,12 @@ from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, fro
 from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
-    LIGHT_ENVIRONMENT,
-    LIGHT_SKY,
-    LIGHT_SPOT,
-    LIGHT_SUN,
     MAX_WAVELENGTHS_PER_PATH,
     PHASE_RAYLEIGH,
     SHADOW_ROULETTE_BELOW,
     SHADOW_ROULETTE_STOP,
 )
-from .light_sampling import choose_light
+from .light_sampling import choose_light, incident_radiance, infinite_pdf, infinite_radiance, is_delta, sample_light
 from .lookups import on_grid, table_at
 from .media import (
     albedo,
@@ -337,86 +333,13 @@ def _pick_medium(weights, i, u):
 # ----------------------------------------------------------------------------- lights
 
 @jit(inline="always")
-def _sky_radiance(ks, light, lam, dz):
-    t = min(max(dz, 0.0), 1.0)
-    at = on_grid(lam)
-    return t * table_at(ks.light_spd, light, at) + (1.0 - t) * table_at(ks.light_spd_horizon, light, at)
-
-
-@jit(inline="always")
-def _sun_solid_angle(ks, light):
-    return 2.0 * math.pi * (1.0 - ks.light_cos[light])
-
-
-@jit(inline="always")
-def _infinite_radiance(ks, light, lam, dx, dy, dz):
-    """Radiance of a non-delta infinite light seen along direction (dx, dy, dz) (0 for others)."""
-    kind = ks.light_kind[light]
-    if kind == LIGHT_ENVIRONMENT:
-        return table_at(ks.light_spd, light, on_grid(lam))
-    if kind == LIGHT_SKY:
-        return _sky_radiance(ks, light, lam, dz)
-    if kind == LIGHT_SUN and ks.light_cos[light] < 1.0:
-        to_sun = ks.light_dir[light]
-        if dx * to_sun[0] + dy * to_sun[1] + dz * to_sun[2] >= ks.light_cos[light]:
-            sin2 = 1.0 - ks.light_cos[light] ** 2
-            return table_at(ks.light_spd, light, on_grid(lam)) / (math.pi * sin2)
-    return 0.0
-
-
-@jit(inline="always")
-def _infinite_pdf(ks, light, dx, dy, dz):
-    """Solid-angle pdf of `_sample_light` producing this direction for a non-delta infinite light."""
-    kind = ks.light_kind[light]
-    if kind == LIGHT_ENVIRONMENT or kind == LIGHT_SKY:
-        return 1.0 / (4.0 * math.pi)
-    if kind == LIGHT_SUN and ks.light_cos[light] < 1.0:
-        to_sun = ks.light_dir[light]
-        if dx * to_sun[0] + dy * to_sun[1] + dz * to_sun[2] >= ks.light_cos[light]:
-            return 1.0 / _sun_solid_angle(ks, light)
-    return 0.0
-
-
-@jit(inline="always")
 def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
-    """Direction to the light, its solid-angle pdf (1 for delta lights), distance, delta flag;
-    fills `radiance` with the incident radiance (irradiance / intensity / d² for delta lights)."""
-    kind = ks.light_kind[light]
-    if kind == LIGHT_SUN:
-        to_sun = ks.light_dir[light]
-        if ks.light_cos[light] >= 1.0:
-            for i in range(n):
-                radiance[i] = table_at(ks.light_spd, light, on_grid(lams[i]))
-            return to_sun[0], to_sun[1], to_sun[2], 1.0, INF, True
-        cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
-        wx, wy, wz = sample_direction((to_sun[0], to_sun[1], to_sun[2]), cos_theta, u2)
-        for i in range(n):
-            radiance[i] = _infinite_radiance(ks, light, lams[i], wx, wy, wz)
-        return wx, wy, wz, 1.0 / _sun_solid_angle(ks, light), INF, False
-    if kind == LIGHT_ENVIRONMENT or kind == LIGHT_SKY:
-        wz = 1.0 - 2.0 * u1
-        r = math.sqrt(max(0.0, 1.0 - wz * wz))
-        wx, wy = r * math.cos(2.0 * math.pi * u2), r * math.sin(2.0 * math.pi * u2)
-        for i in range(n):
-            radiance[i] = _infinite_radiance(ks, light, lams[i], wx, wy, wz)
-        return wx, wy, wz, 1.0 / (4.0 * math.pi), INF, False
-    position = ks.light_pos[light]
-    vx, vy, vz = position[0] - px, position[1] - py, position[2] - pz
-    distance = math.sqrt(vx * vx + vy * vy + vz * vz)
-    wx, wy, wz = vx / distance, vy / distance, vz / distance
-    falloff = 1.0 / (distance * distance)
-    if kind == LIGHT_SPOT:
-        axis = ks.light_dir[light]
-        cos_angle = -(wx * axis[0] + wy * axis[1] + wz * axis[2])
-        smooth = ks.light_smooth[light]
-        if smooth > 0.0:
-            t = min(max((cos_angle - ks.light_cos[light]) / smooth, 0.0), 1.0)
-            falloff *= t * t * (3.0 - 2.0 * t)
-        elif cos_angle < ks.light_cos[light]:
-            falloff = 0.0
+    """`light_sampling.sample_light` from (px, py, pz): direction, solid-angle pdf, distance and whether the
+    light is a delta light; fills `radiance` with the radiance arriving at each wavelength."""
+    wx, wy, wz, direction_pdf, distance, falloff = sample_light(ks, light, px, py, pz, u1, u2)
     for i in range(n):
-        radiance[i] = table_at(ks.light_spd, light, on_grid(lams[i])) * falloff
-    return wx, wy, wz, 1.0, distance, True
+        radiance[i] = incident_radiance(ks, light, on_grid(lams[i]), wx, wy, wz, falloff)
+    return wx, wy, wz, direction_pdf, distance, is_delta(ks, light)
 
 
 # ----------------------------------------------------------------------------- path state
@@ -600,7 +523,7 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
 @jit(inline="always")
 def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, light, tracker):
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
-    transmittance, MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
+    transmittance (residual ratio tracking towards delta lights), MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
     chosen = choose_light(ks.light_pmf, _next(path.stream))
     u1, u2 = _next(path.stream), _next(path.stream)
     wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, chosen, ox, oy, oz, u1, u2, path.lams, n,
@@ -713,11 +636,11 @@ def _escape(ks, dx, dy, dz, scattered, n, path, light):
     against light sampling after a scattering vertex."""
     for chosen in range(ks.light_kind.shape[0]):
         for i in range(n):
-            light.radiance[i] = _infinite_radiance(ks, chosen, path.lams[i], dx, dy, dz)
+            light.radiance[i] = infinite_radiance(ks, chosen, on_grid(path.lams[i]), dx, dy, dz)
         if not scattered:
             mean_r = _mean(path.r_u, n)
         else:
-            light_pdf = ks.light_pmf[chosen] * _infinite_pdf(ks, chosen, dx, dy, dz)
+            light_pdf = ks.light_pmf[chosen] * infinite_pdf(ks, chosen, dx, dy, dz)
             for i in range(n):
                 light.r_l[i] = path.r_u[i] + path.r_l[i] * light_pdf
             mean_r = _mean(light.r_l, n)

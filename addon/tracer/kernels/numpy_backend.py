@@ -29,8 +29,7 @@ from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, fro
 from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
-from .layout import LIGHT_ENVIRONMENT as ENVIRONMENT, LIGHT_SKY as SKY, LIGHT_SPOT as SPOT, LIGHT_SUN as SUN
-from .light_sampling import choose_light
+from .light_sampling import choose_light, incident_radiance, infinite_pdf, infinite_radiance, is_delta, sample_light
 from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 
@@ -69,10 +68,6 @@ def _draw(paths, rows=slice(None)):
 
 
 # ----------------------------------------------------------------------------- small helpers
-
-def _dot(a, b):
-    return a[:, 0] * b[0] + a[:, 1] * b[1] + a[:, 2] * b[2]
-
 
 def _columns(v):
     """The components (x, y, z) of rows of 3-vectors, as the shared functions take points and directions."""
@@ -294,82 +289,26 @@ def _pick_medium(weights, u):
 
 # ----------------------------------------------------------------------------- lights
 
-def _sun_solid_angle(ks, light):
-    return 2.0 * np.pi * (1.0 - ks.light_cos[light])
-
-
-def _infinite_radiance(ks, light, at, directions):
-    """Radiance of a non-delta infinite light seen along `directions`, at the wavelengths located by
-    `at` (0 for other lights)."""
-    kind = ks.light_kind[light]
-    if kind == ENVIRONMENT:
-        return table_at(ks.light_spd, light, at)
-    if kind == SKY:
-        t = np.minimum(np.maximum(directions[:, 2], 0.0), 1.0)[:, None]
-        return t * table_at(ks.light_spd, light, at) + (1.0 - t) * table_at(ks.light_spd_horizon, light, at)
-    if kind == SUN and ks.light_cos[light] < 1.0:
-        seen = _dot(directions, ks.light_dir[light]) >= ks.light_cos[light]
-        sin2 = 1.0 - ks.light_cos[light] ** 2
-        return np.where(seen[:, None], table_at(ks.light_spd, light, at) / (np.pi * sin2), 0.0)
-    return np.zeros(at[0].shape)
-
-
-def _infinite_pdf(ks, light, directions):
-    """Solid-angle pdf of `_sample_light` producing `directions` for a non-delta infinite light."""
-    kind = ks.light_kind[light]
-    if kind == ENVIRONMENT or kind == SKY:
-        return np.full(directions.shape[0], 1.0 / (4.0 * np.pi))
-    if kind == SUN and ks.light_cos[light] < 1.0:
-        seen = _dot(directions, ks.light_dir[light]) >= ks.light_cos[light]
-        return np.where(seen, 1.0 / _sun_solid_angle(ks, light), 0.0)
-    return np.zeros(directions.shape[0])
-
-
-def _sample_light(ks, light, points, u1, u2, lams):
-    """Directions to one light from `points`: (directions, solid-angle pdf (1 for delta lights),
-    distance, delta flag, incident radiance per wavelength (irradiance / intensity / d² for delta))."""
-    kind = ks.light_kind[light]
-    count = points.shape[0]
-    at = on_grid(lams)
-    if kind == SUN and ks.light_cos[light] >= 1.0:
-        return (np.broadcast_to(ks.light_dir[light], (count, 3)), np.ones(count), np.full(count, INF),
-                True, table_at(ks.light_spd, light, at))
-    if kind == SUN:
-        cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
-        w = _direction(np.broadcast_to(ks.light_dir[light], (count, 3)), cos_theta, u2)
-        pdf = np.full(count, 1.0 / _sun_solid_angle(ks, light))
-        return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, at, w)
-    if kind == ENVIRONMENT or kind == SKY:
-        wz = 1.0 - 2.0 * u1
-        r = np.sqrt(np.maximum(0.0, 1.0 - wz * wz))
-        w = np.stack([r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2), wz], axis=1)
-        pdf = np.full(count, 1.0 / (4.0 * np.pi))
-        return w, pdf, np.full(count, INF), False, _infinite_radiance(ks, light, at, w)
-    v = ks.light_pos[light] - points
-    distance = np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
-    w = v / distance[:, None]
-    falloff = 1.0 / (distance * distance)
-    if kind == SPOT:
-        cos_angle = -_dot(w, ks.light_dir[light])
-        smooth = ks.light_smooth[light]
-        if smooth > 0.0:
-            t = np.minimum(np.maximum((cos_angle - ks.light_cos[light]) / smooth, 0.0), 1.0)
-            falloff = falloff * (t * t * (3.0 - 2.0 * t))
-        else:
-            falloff = np.where(cos_angle < ks.light_cos[light], 0.0, falloff)
-    return w, np.ones(count), distance, True, table_at(ks.light_spd, light, at) * falloff[:, None]
+def _column_components(v):
+    """The components of rows of 3-vectors as columns (rows, 1), against spectra (rows, wavelengths)."""
+    return v[:, 0:1], v[:, 1:2], v[:, 2:3]
 
 
 def _sample_lights(ks, lights, points, u1, u2, lams):
-    """`_sample_light` for each path's own light (`lights`, one index per path)."""
+    """`light_sampling.sample_light` from `points` towards each path's own light (`lights`, one index per
+    path): directions w, solid-angle pdf, distance, delta flag and the radiance arriving per wavelength."""
     count = points.shape[0]
     out = _Batch(w=np.zeros((count, 3)), pdf=np.zeros(count), distance=np.zeros(count),
                  delta=np.zeros(count, dtype=bool), radiance=np.zeros(lams.shape))
     for light in range(ks.light_kind.shape[0]):
         rows = np.flatnonzero(lights == light)
         if rows.size:
-            out.w[rows], out.pdf[rows], out.distance[rows], out.delta[rows], out.radiance[rows] = _sample_light(
-                ks, light, points[rows], u1[rows], u2[rows], lams[rows])
+            wx, wy, wz, out.pdf[rows], out.distance[rows], falloff = sample_light(
+                ks, light, *_columns(points[rows]), u1[rows], u2[rows])
+            out.w[rows] = _rows((wx, wy, wz), rows.size)
+            out.delta[rows] = is_delta(ks, light)
+            out.radiance[rows] = incident_radiance(ks, light, on_grid(lams[rows]), *_column_components(out.w[rows]),
+                                                   np.broadcast_to(falloff, (rows.size,))[:, None])
     return out
 
 
@@ -481,10 +420,11 @@ def _escape(ks, paths, radiance):
     against light sampling after a scattering vertex."""
     plain_mean = _mean(paths.r_u)
     at = on_grid(paths.lams)
+    directions = _column_components(paths.d)
     for light in range(ks.light_kind.shape[0]):
-        light_radiance = _infinite_radiance(ks, light, at, paths.d)
-        light_pdf = ks.light_pmf[light] * _infinite_pdf(ks, light, paths.d)
-        mean_r = np.where(paths.scattered, _mean(paths.r_u + paths.r_l * light_pdf[:, None]), plain_mean)
+        light_radiance = infinite_radiance(ks, light, at, *directions)
+        light_pdf = ks.light_pmf[light] * infinite_pdf(ks, light, *directions)
+        mean_r = np.where(paths.scattered, _mean(paths.r_u + paths.r_l * light_pdf), plain_mean)
         radiance[paths.id] += paths.beta * light_radiance / mean_r[:, None]
 
 
@@ -545,7 +485,7 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
 
 def _next_event(ks, paths, vertex, isotropic, radiance):
     """Next-event estimation from every vertex: one light chosen by its pmf, ratio-tracked
-    transmittance, MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
+    transmittance (residual ratio tracking towards delta lights), MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
     choice, u1, u2 = _draw(paths), _draw(paths), _draw(paths)
     lights = choose_light(ks.light_pmf, choice)
     sample = _sample_lights(ks, lights, paths.o, u1, u2, paths.lams)
