@@ -109,7 +109,8 @@ def main(argv=None) -> int:
             for name, values in run_worker(versions[label], caches[label], args, round_index + 1).items():
                 results[label][name].append(values)
         print(f"round {round_index + 1} of {args.rounds} done", flush=True)
-    print("\n| scene | CPU s A | CPU s B | noise A | noise B | efficiency B/A | mean Y A | mean Y B | spread of mean Y |")
+    print("\n| scene | CPU s A | CPU s B | noise A | noise B | efficiency B/A | mean Y A | mean Y B "
+          "| spread of mean Y |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for name in args.scenes:
         seconds, noise, mean = ({label: [values[k] for values in results[label][name]] for label in versions}

@@ -236,7 +236,8 @@ def _block(ks, tracker, m):
     """Where medium m's current block is in `majorant_data` (and `minorant_data`)."""
     state_i = tracker.state_i
     shape = ks.majorant_shape[m]
-    return ks.majorant_offset[m] + (state_i[m, CELL] * shape[1] + state_i[m, CELL + 1]) * shape[2] + state_i[m, CELL + 2]
+    index = (state_i[m, CELL] * shape[1] + state_i[m, CELL + 1]) * shape[2] + state_i[m, CELL + 2]
+    return ks.majorant_offset[m] + index
 
 
 @jit(inline="always")
@@ -523,7 +524,8 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
 @jit(inline="always")
 def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, light, tracker):
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
-    transmittance (residual ratio tracking towards delta lights), MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
+    transmittance (residual ratio tracking towards delta lights), MIS against phase sampling (balance
+    heuristic over wavelengths and strategies)."""
     chosen = choose_light(ks.light_pmf, _next(path.stream))
     u1, u2 = _next(path.stream), _next(path.stream)
     wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, chosen, ox, oy, oz, u1, u2, path.lams, n,

@@ -485,7 +485,8 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
 
 def _next_event(ks, paths, vertex, isotropic, radiance):
     """Next-event estimation from every vertex: one light chosen by its pmf, ratio-tracked
-    transmittance (residual ratio tracking towards delta lights), MIS against phase sampling (balance heuristic over wavelengths and strategies)."""
+    transmittance (residual ratio tracking towards delta lights), MIS against phase sampling (balance
+    heuristic over wavelengths and strategies)."""
     choice, u1, u2 = _draw(paths), _draw(paths), _draw(paths)
     lights = choose_light(ks.light_pmf, choice)
     sample = _sample_lights(ks, lights, paths.o, u1, u2, paths.lams)
