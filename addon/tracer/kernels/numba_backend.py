@@ -28,7 +28,7 @@ the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `geo
 (`_trace`: `_transport` with `_free_flight`, `_offer_fluorescence`, `_escape`, `_next_event`, `_sample_phase`,
 `_survives_roulette`; then `_start_fluorescent_branch` for each fluorescent sub-path),
 then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`). The
-physics at a point (look-ups, coefficients, phase functions, lights, free paths) is the shared
+physics at a point (look-ups, coefficients, phase functions, lights, free paths, the DDA's arithmetic) is the shared
 arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module holds the path's loops
 and state. Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
 scene's arrays are borrowed

@@ -10,8 +10,9 @@ lights, free paths: docs/algorithm.md), called here on arrays of paths; this mod
 the wavefront's loops and state.
 
 Free flight and shadow rays traverse each medium's majorant grid block by block, a DDA vectorised over
-rays (`_tracker_*`, the same state machine as the Numba kernel's): each loop iteration moves every ray by
-one segment or one tentative collision, and rays that are done leave the batch.
+rays (`_tracker_*`, the same state machine as the Numba kernel's, on the shared per-axis arithmetic of
+`dda`): each loop iteration moves every ray by one segment or one tentative collision, and rays that are
+done leave the batch. Shadow rays towards delta lights use residual ratio tracking (`_transmittance`).
 
 Every path draws from the same stream of random numbers (`rng`: low-discrepancy, then hashed), in the same order
 and with the same arithmetic as the Numba kernel, so the two backends trace the same paths: images agree
