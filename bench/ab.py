@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-SCENES = ("sun-sphere", "sun-cloud", "environment-sphere", "environment-cloud", "albedo", "chromatic", "dense")
+from bench.vs_mitsuba import FAMILY
 
 
 def parse(argv=None):
@@ -35,7 +35,7 @@ def parse(argv=None):
                                      formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
     parser.add_argument("a", type=Path, help="checkout of version A (the baseline)")
     parser.add_argument("b", type=Path, help="checkout of version B")
-    parser.add_argument("--scenes", nargs="+", choices=SCENES, default=list(SCENES))
+    parser.add_argument("--scenes", nargs="+", choices=list(FAMILY), default=list(FAMILY))
     parser.add_argument("--size", type=int, help="image width and height (default 96; quick 48)")
     parser.add_argument("--spp", type=int, help="samples per pixel per round (default 32; quick 8)")
     parser.add_argument("--rounds", type=int, help="rounds per version (default 8; quick 2)")
@@ -58,7 +58,6 @@ def measure(scenes, size: int, spp: int, seed: int) -> dict:
 
     from bench.measure import render_ours, warm_up
     from bench.scenes import CloudSpec, cloud_scene
-    from bench.vs_mitsuba import FAMILY
 
     numba_backend.set_threads(1)
     out = {}

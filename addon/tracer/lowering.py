@@ -11,6 +11,7 @@ import numpy as np
 from . import colorimetry, sampling
 from .errors import SpectralError
 from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, PHASES, KernelScene
+from .kernels.media import attenuation
 from .lights import selection_powers, strength_scale
 from .majorant import block_size_for, majorant_grid, minorant_grid
 from .scene import Grid, Light, Medium, Scene
@@ -74,7 +75,7 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
             excitation = sampling.from_spectrum(fluorescence.excitation, LAMBDA_MIN, LAMBDA_MAX)
             out["excitation_cdf"][index] = excitation.cdf
             out["excitation_pdf"][index] = excitation.bin_pdf
-    peak = out["extinction"] + out["excitation"]
+    peak = attenuation(1.0, out["extinction"], out["excitation"])  # σ_t per unit density, as tracking sees it
     out["majorant_coeff"] = out["density_scale"] * (peak.max(axis=1) if count else np.zeros(0))
 
     densities = [np.asarray(m.density.values, dtype=np.float32) for m in media]

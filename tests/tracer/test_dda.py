@@ -63,7 +63,7 @@ def test_walk_visits_the_blocks_the_ray_passes_through(seed):
         # A sample may skip a block the ray only grazes (shorter than the sampling step): those are
         # allowed in the walk, never the reverse.
         assert all(cell in blocks for cell in expected)
-        assert blocks[:1] == expected[:1] and blocks[-1:] == expected[-1:] if expected else blocks == []
+        assert (blocks[0] == expected[0] and blocks[-1] == expected[-1]) if expected else blocks == []
         positions = [blocks.index(cell) for cell in expected]
         assert positions == sorted(positions)
         for (cell, leave), next_cell in zip(visited, blocks[1:]):

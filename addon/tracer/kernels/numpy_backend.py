@@ -71,7 +71,8 @@ def _draw(paths, rows=slice(None)):
 # ----------------------------------------------------------------------------- small helpers
 
 def _columns(v):
-    """The components (x, y, z) of rows of 3-vectors, as the shared functions take points and directions."""
+    """The components (x, y, z) of rows of 3-vectors, as the shared functions take points and directions
+    (of `v[:, :, None]`: columns (rows, 1), to meet spectra (rows, wavelengths))."""
     return v[:, 0], v[:, 1], v[:, 2]
 
 
@@ -290,11 +291,6 @@ def _pick_medium(weights, u):
 
 # ----------------------------------------------------------------------------- lights
 
-def _column_components(v):
-    """The components of rows of 3-vectors as columns (rows, 1), against spectra (rows, wavelengths)."""
-    return v[:, 0:1], v[:, 1:2], v[:, 2:3]
-
-
 def _sample_lights(ks, lights, points, u1, u2, lams):
     """`light_sampling.sample_light` from `points` towards each path's own light (`lights`, one index per
     path): directions w, solid-angle pdf, distance, delta flag and the radiance arriving per wavelength."""
@@ -308,7 +304,7 @@ def _sample_lights(ks, lights, points, u1, u2, lams):
                 ks, light, *_columns(points[rows]), u1[rows], u2[rows])
             out.w[rows] = _rows((wx, wy, wz), rows.size)
             out.delta[rows] = is_delta(ks, light)
-            out.radiance[rows] = incident_radiance(ks, light, on_grid(lams[rows]), *_column_components(out.w[rows]),
+            out.radiance[rows] = incident_radiance(ks, light, on_grid(lams[rows]), *_columns(out.w[rows, :, None]),
                                                    np.broadcast_to(falloff, (rows.size,))[:, None])
     return out
 
@@ -421,7 +417,7 @@ def _escape(ks, paths, radiance):
     against light sampling after a scattering vertex."""
     plain_mean = _mean(paths.r_u)
     at = on_grid(paths.lams)
-    directions = _column_components(paths.d)
+    directions = _columns(paths.d[:, :, None])
     for light in range(ks.light_kind.shape[0]):
         light_radiance = infinite_radiance(ks, light, at, *directions)
         light_pdf = ks.light_pmf[light] * infinite_pdf(ks, light, *directions)
@@ -439,8 +435,9 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
     count, n = lams.shape
     transmittance = np.ones(lams.shape)
     null_ratio = np.ones(lams.shape)
-    extinction = np.stack([table_at(ks.extinction, m, on_grid(lams)) for m in range(ks.density_scale.shape[0])], 1)
-    excitation = np.stack([table_at(ks.excitation, m, on_grid(lams)) for m in range(ks.density_scale.shape[0])], 1)
+    at = on_grid(lams)
+    extinction = np.stack([table_at(ks.extinction, m, at) for m in range(ks.density_scale.shape[0])], 1)
+    excitation = np.stack([table_at(ks.excitation, m, at) for m in range(ks.density_scale.shape[0])], 1)
     depth = np.zeros((count, ks.density_scale.shape[0]))  # the control's integral along each ray so far
     control_now = np.zeros(depth.shape)
 
