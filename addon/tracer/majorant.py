@@ -8,8 +8,9 @@ its density is a convex combination of theirs, so the block's majorant and minor
 the minimum over those cells (the padding's zeros included; a block reaching past the array holds zero
 density).
 
-Free flights track against the majorant; shadow rays towards delta lights track the minorant's
-extinction analytically and only the residual against the majorant (residual ratio tracking).
+Free flights track against the majorant; shadow rays towards delta lights, and those of grey paths,
+track the minorant's extinction analytically and only the residual against the majorant (residual ratio
+tracking).
 """
 
 import numpy as np

@@ -39,14 +39,23 @@ def xyz_of(values_on_grid):
     return colorimetry.spectrum_to_xyz(values_on_grid)
 
 
-@pytest.mark.parametrize("chromatic", [False, True], ids=["grey", "chromatic-extinction-and-g"])
-def test_white_furnace_returns_the_environment(chromatic):
+def _gaussian_ball():
+    """A smooth density peaking at 1 in the middle of a 1.8-unit cube: its majorant blocks have positive
+    minorants, which residual ratio tracking integrates exactly."""
+    return s.sampled_grid(lambda x, y, z: np.exp(-(x * x + y * y + z * z) / (2 * 0.3**2)), (16, 16, 16),
+                          (-0.9, -0.9, -0.9), (0.9, 0.9, 0.9))
+
+
+@pytest.mark.parametrize("chromatic, grid", [(False, s.box_grid), (True, s.box_grid), (False, _gaussian_ball)],
+                         ids=["grey", "chromatic-extinction-and-g", "grey-gaussian-ball"])
+def test_white_furnace_returns_the_environment(chromatic, grid):
     """Albedo 1 inside a uniform environment: every pixel sees the environment's radiance, whatever
-    the extinction and anisotropy spectra (this exercises the spectral MIS with 4 wavelengths)."""
+    the extinction and anisotropy spectra (this exercises the spectral MIS with 4 wavelengths) and the
+    density field. In grey media, light sampling (residual ratio tracking) and phase sampling are weighed
+    by the controls' transmittance: weights that did not sum to one would show here."""
     extinction = s.smooth_ramp(4.0, 0.4) if chromatic else 2.0
     g = s.smooth_ramp(-0.3, 0.8) if chromatic else 0.0
-    box = s.box_grid()
-    scene = s.scene(s.perspective_camera(12, 12), [s.medium(box, extinction=extinction, g=g)],
+    scene = s.scene(s.perspective_camera(12, 12), [s.medium(grid(), extinction=extinction, g=g)],
                     [s.environment()], spp=48, max_depth=500, rr_depth=500, seed=3)
     film = render(scene).film
     expected = xyz_of(np.ones(GRID.size))
@@ -123,14 +132,14 @@ SINGLE_SCATTERING_MEDIA = {
     # name: (density grid inside |z| < 1, extinction)
     "thin-box": (s.box_grid(cells=(10, 10, 10), size=(2.0, 2.0, 1.0)), 0.6),
     # Optical depth about 1.9 through the centre and smoothly varying: shadow rays towards delta lights
-    # track most of it exactly (the blocks' minorants) and ratio-track the rest (residual ratio tracking).
-    "gaussian-ball": (s.sampled_grid(lambda x, y, z: np.exp(-(x * x + y * y + z * z) / (2 * 0.3**2)), (16, 16, 16),
-                                     (-0.9, -0.9, -0.9), (0.9, 0.9, 0.9)), 2.5),
+    # (delta suns and points; the 3° sun in this grey medium too) track most of it exactly (the blocks'
+    # minorants) and ratio-track the rest (residual ratio tracking).
+    "gaussian-ball": (_gaussian_ball(), 2.5),
 }
 
 
 @pytest.mark.parametrize("light_name, medium_name", [(light, "thin-box") for light in SINGLE_SCATTERING_LIGHTS]
-                         + [("sun", "gaussian-ball"), ("point", "gaussian-ball")])
+                         + [(light, "gaussian-ball") for light in ("sun", "sun-3-degrees", "point")])
 def test_single_scattering_matches_quadrature(light_name, medium_name):
     """A lit medium seen from above, single scattering only (max depth 1): the pixel radiance is
     ∫ T_cam σ_s p_HG(θ) E T_light dt, evaluated here by quadrature on the same density field."""

@@ -26,6 +26,9 @@ LIGHT_SPOT = LIGHT_KINDS.index("spot")
 MAX_WAVELENGTHS_PER_PATH = max(WAVELENGTHS_PER_PATH)
 # Shadow rays whose every transmittance is below this play Russian roulette, stopping with this probability.
 SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
+# A path is grey when its attenuation per unit density spreads over its wavelengths by less than this
+# (relative; interpolating a flat spectrum rounds differently at each wavelength).
+GREY_SPREAD = 1e-9
 
 
 class KernelScene(NamedTuple):

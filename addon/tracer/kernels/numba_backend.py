@@ -18,8 +18,8 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   radiance, times the collision's weight ÷ its mixture probability and each camera wavelength's share,
   is added to the path's. The sub-path's own reservoirs give the next (cascades, no recursion).
 - Next-event estimation at every real scattering vertex with ratio-tracked transmittance (residual
-  ratio tracking towards delta lights), combined with phase sampling by MIS for environment and finite
-  suns.
+  ratio tracking towards delta lights and on grey paths), combined with phase sampling by MIS for
+  environment, sky and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
 - Thermal emission σ_a·Planck(T) is collected at every tentative collision.
 
 Structure: `render_tile` runs runs of pixels in parallel; `_render_pixels` makes a run's buffers once
@@ -51,6 +51,7 @@ from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, fro
 from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
+    GREY_SPREAD,
     MAX_WAVELENGTHS_PER_PATH,
     PHASE_RAYLEIGH,
     SHADOW_ROULETTE_BELOW,
@@ -241,25 +242,33 @@ def _block(ks, tracker, m):
 
 
 @jit(inline="always")
-def _tracker_segment(ks, tracker, residual):
-    """(end of the current segment, the rate to track against on it): the combined majorant σ̄, or with
-    `residual` the residual majorant σ̄ − σ_c, each medium's control σ_c (its block's minorant, scaled
-    density; 0 outside its blocks) then in its CONTROL slot."""
+def _tracker_segment(ks, tracker, controls):
+    """(end of the current segment, the combined majorant σ̄ on it, the controls' share of σ̄). With
+    `controls`, each medium's control σ_c (its block's minorant, scaled density; 0 outside its blocks) goes
+    to its CONTROL slot and the share is Σ σ_c·coeff: σ̄ less it is the residual majorant of residual ratio
+    tracking. Without, the share is 0."""
     t_end = INF
-    rate = 0.0
+    sigma_bar = 0.0
+    control_rate = 0.0
     for m in range(ks.density_scale.shape[0]):
         t_end = min(t_end, _tracker_boundary(tracker, m))
         if tracker.state_i[m, PHASE] == INSIDE:
             block = _block(ks, tracker, m)
-            bound = np.float64(ks.majorant_data[block])
-            if residual:
+            sigma_bar += np.float64(ks.majorant_data[block]) * ks.majorant_coeff[m]
+            if controls:
                 control = np.float64(ks.minorant_data[block])
                 tracker.state_f[m, CONTROL] = control * ks.density_scale[m]
-                bound -= control
-            rate += bound * ks.majorant_coeff[m]
-        elif residual:
+                control_rate += control * ks.majorant_coeff[m]
+        elif controls:
             tracker.state_f[m, CONTROL] = 0.0
-    return t_end, rate
+    return t_end, sigma_bar, control_rate
+
+
+@jit(inline="always")
+def _integrate_controls(ks, tracker, dt):
+    """Each medium's control integrated over dt more of the ray (its DEPTH slot)."""
+    for m in range(ks.density_scale.shape[0]):
+        tracker.state_f[m, DEPTH] += tracker.state_f[m, CONTROL] * dt
 
 
 @jit(inline="always")
@@ -288,17 +297,21 @@ def _tracker_advance(ks, tracker, t_end):
 
 
 @jit(inline="always")
-def _tentative_collision(ks, stream, tracker, t):
+def _tentative_collision(ks, stream, tracker, t, controls):
     """Delta tracking from ray parameter t: the next tentative collision (t, σ̄ there), or (INF, 0)
-    when the ray leaves every medium (or passes the tracker's t_max)."""
+    when the ray leaves every medium (or passes the tracker's t_max). With `controls`, the controls are
+    integrated along the way (`_integrate_controls`)."""
     while True:
-        t_end, sigma_bar = _tracker_segment(ks, tracker, False)
+        t_end, sigma_bar, _ = _tracker_segment(ks, tracker, controls)
         if t_end == INF:
             return INF, 0.0
+        t_next = t_end
         if sigma_bar > 0.0:
-            step = free_path(_next(stream), sigma_bar)
-            if t + step < t_end:
-                return t + step, sigma_bar
+            t_next = min(t + free_path(_next(stream), sigma_bar), t_end)
+        if controls:
+            _integrate_controls(ks, tracker, t_next - t)
+        if t_next < t_end:
+            return t_next, sigma_bar
         t = t_end
         _tracker_advance(ks, tracker, t_end)
 
@@ -354,8 +367,9 @@ Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radianc
 # `dye` holds the dyes' absorption at their mean excitation (`fluorescent_reservoir`'s optical depth).
 Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s medium_fl dye")
 # Next-event estimation's per-wavelength values: the light's radiance, the phase function, ratio-tracked
-# transmittance and null-event ratio, and the MIS sums.
-LightSample = namedtuple("LightSample", "radiance phase transmittance null_ratio r_l r_u")
+# transmittance and the unidirectional strategy's survival along the shadow ray (`_transmittance`), and
+# the MIS sums.
+LightSample = namedtuple("LightSample", "radiance phase transmittance survival r_l r_u")
 # One majorant DDA per medium (`_tracker_*`): integer and float state per medium.
 Tracker = namedtuple("Tracker", "state_i state_f")
 # The fluorescent branch (`_offer_fluorescence`, `fluorescent_reservoir`): per reservoir (unguided, front,
@@ -443,6 +457,28 @@ def _control_depth(ks, tracker, spec, i):
 
 
 @jit(inline="always")
+def _is_grey(ks, n, spec):
+    """Whether the path may weigh light sampling against phase sampling with residual ratio tracking: a
+    light is not a delta light, and the path is grey (every medium attenuates its wavelengths alike, to
+    GREY_SPREAD). Then the unidirectional strategy's null-event probabilities are the same at every
+    wavelength and cancel out of the spectral MIS, so MIS may give both strategies the controls'
+    transmittance in their place (docs/algorithm.md, "Lights and next-event estimation")."""
+    area_light = False
+    for light in range(ks.light_kind.shape[0]):
+        if not is_delta(ks, light):
+            area_light = True
+    if not area_light:
+        return False
+    for m in range(ks.density_scale.shape[0]):
+        first = attenuation(1.0, spec[m, SPEC_EXTINCTION, 0], spec[m, SPEC_EXCITATION, 0])
+        for i in range(1, n):
+            value = attenuation(1.0, spec[m, SPEC_EXTINCTION, i], spec[m, SPEC_EXCITATION, i])
+            if abs(value - first) > GREY_SPREAD * first:
+                return False
+    return True
+
+
+@jit(inline="always")
 def _faint_shadow_survives(ks, n, path, light, tracker, residual):
     """Russian roulette on a faint shadow ray (every transmittance below SHADOW_ROULETTE_BELOW; with
     `residual`, the ratio-tracked factors times the control's transmittance at its least optical depth):
@@ -472,33 +508,37 @@ def _faint_shadow_survives(ks, n, path, light, tracker, residual):
 
 @jit(inline="always")
 def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, tracker):
-    """Ratio tracking along a shadow ray: fills `light.transmittance` (per λ) and `light.null_ratio`, the
-    product of the unidirectional null-event probabilities σ_n/σ̄ per λ (for MIS).
+    """Ratio tracking along a shadow ray: fills `light.transmittance` (per λ) and `light.survival`, the
+    chance MIS gives the unidirectional strategy of passing where the shadow ray passed (per λ).
 
-    With `residual` (towards delta lights, whose MIS needs no `null_ratio`): residual ratio tracking
+    Plain ratio tracking: the survival is the product of the unidirectional null-event probabilities
+    σ_n/σ̄ at the shadow ray's tentative collisions (the null-scattering path integral's MIS).
+
+    With `residual` (towards delta lights, and for grey paths, `_is_grey`): residual ratio tracking
     (Novák et al. 2014). Each block's minorant, the control, is integrated exactly (`DEPTH`), and only
     the rest is ratio-tracked, against the residual majorant σ̄ − σ_c: in a smooth medium few tentative
-    collisions and little variance."""
-    transmittance, null_ratio, state_f = light.transmittance, light.null_ratio, tracker.state_f
+    collisions and little variance. The survival is then the controls' transmittance exp(−∫σ_c), which
+    `_free_flight` gives escaping paths too (docs/algorithm.md)."""
+    transmittance, survival, state_f = light.transmittance, light.survival, tracker.state_f
     for i in range(n):
         transmittance[i] = 1.0
-        null_ratio[i] = 1.0
+        survival[i] = 1.0
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, tracker)
     for m in range(ks.density_scale.shape[0]):
         state_f[m, CONTROL] = 0.0  # no control: plain ratio tracking
         state_f[m, DEPTH] = 0.0
     t = 0.0
     while True:
-        t_end, rate = _tracker_segment(ks, tracker, residual)
+        t_end, sigma_bar, control_rate = _tracker_segment(ks, tracker, residual)
         if t_end == INF:
             break
+        rate = sigma_bar - control_rate
         while True:
             t_next = t_end
             if rate > 0.0:
                 t_next = min(t + free_path(_next(path.stream), rate), t_end)
             if residual:
-                for m in range(ks.density_scale.shape[0]):
-                    state_f[m, DEPTH] += state_f[m, CONTROL] * (t_next - t)
+                _integrate_controls(ks, tracker, t_next - t)
             t = t_next
             if t == t_end:
                 break
@@ -512,20 +552,22 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
                                           path.spec[m, SPEC_EXCITATION, i])
                 ratio = null_fraction(rate, excess, 0.0)
                 transmittance[i] *= ratio
-                null_ratio[i] *= ratio
+                if not residual:
+                    survival[i] *= ratio
             if not _faint_shadow_survives(ks, n, path, light, tracker, residual):
                 return
         _tracker_advance(ks, tracker, t_end)
     if residual:
         for i in range(n):
-            transmittance[i] *= math.exp(-_control_depth(ks, tracker, path.spec, i))
+            survival[i] = math.exp(-_control_depth(ks, tracker, path.spec, i))
+            transmittance[i] *= survival[i]
 
 
 @jit(inline="always")
-def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, light, tracker):
+def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, grey, n, path, vertex, light, tracker):
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
-    transmittance (residual ratio tracking towards delta lights), MIS against phase sampling (balance
-    heuristic over wavelengths and strategies)."""
+    transmittance (residual ratio tracking towards delta lights and on `grey` paths), MIS against phase
+    sampling (balance heuristic over wavelengths and strategies)."""
     chosen = choose_light(ks.light_pmf, _next(path.stream))
     u1, u2 = _next(path.stream), _next(path.stream)
     wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, chosen, ox, oy, oz, u1, u2, path.lams, n,
@@ -542,11 +584,11 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, n, path, vertex, light, t
             any_light = True
     if not any_light:
         return
-    _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, delta, n, path, light, tracker)
+    _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, delta or grey, n, path, light, tracker)
     light_pdf = ks.light_pmf[chosen] * direction_pdf
     for i in range(n):
         light.r_l[i] = path.r_u[i] * light_pdf
-        light.r_u[i] = 0.0 if delta else path.r_u[i] * light.phase[i] * light.null_ratio[i]
+        light.r_u[i] = 0.0 if delta else path.r_u[i] * light.phase[i] * light.survival[i]
     for i in range(n):
         light.r_l[i] += light.r_u[i]
     mean_r = _mean(light.r_l, n)
@@ -587,17 +629,23 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
 
 
 @jit(inline="always")
-def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, n, path, vertex, tracker, fl):
+def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, controls, n, path, vertex, tracker, fl):
     """Delta tracking to the next real event, collecting thermal emission and offering fluorescent sources
     at every tentative collision and weighting null collisions (spectral MIS ratios included). Returns
-    (event, collision point, σ̄ there); `vertex` keeps the coefficients at a scattering collision."""
+    (event, collision point, σ̄ there); `vertex` keeps the coefficients at a scattering collision.
+
+    With `controls` (a grey path after a scattering vertex, `_is_grey`), light sampling's MIS ratio `r_l`
+    takes no null-event probabilities: the controls are integrated instead, and an escaping path's
+    survival is their transmittance, as a shadow ray's (`_transmittance`)."""
     beta, r_u, r_l = path.beta, path.r_u, path.r_l
     sigma_a, sigma_s = vertex.sigma_a, vertex.sigma_s
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, tracker)
+    for m in range(ks.density_scale.shape[0]):
+        tracker.state_f[m, DEPTH] = 0.0
     fl.tau[0] = 0.0
     t = 0.0
     while True:
-        t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t)
+        t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t, controls)
         if t == INF:
             return EVENT_ESCAPE, ox, oy, oz, 0.0
         qx, qy, qz = ox + t * dx, oy + t * dy, oz + t * dz
@@ -625,7 +673,8 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, n, path, vertex, tracker, fl
             ratio = null_fraction(sigma_bar, sigma_a[i], sigma_s[i])
             beta[i] *= ratio / probability0
             r_u[i] *= ratio / probability0
-            r_l[i] /= probability0
+            if not controls:
+                r_l[i] /= probability0
             if beta[i] > 0.0:
                 alive = True
         if not alive:
@@ -633,21 +682,23 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, n, path, vertex, tracker, fl
 
 
 @jit(inline="always")
-def _escape(ks, dx, dy, dz, scattered, n, path, light):
+def _escape(ks, dx, dy, dz, scattered, survival, n, path, light):
     """Radiance of the infinite lights seen along the escaping ray: plain for a camera ray, MIS-weighted
-    against light sampling after a scattering vertex."""
+    against light sampling after a scattering vertex, with the path's `survival` along the ray as a shadow
+    ray would have given it (`_transmittance`: 1 where `r_l` has the null-event probabilities)."""
     for chosen in range(ks.light_kind.shape[0]):
         for i in range(n):
             light.radiance[i] = infinite_radiance(ks, chosen, on_grid(path.lams[i]), dx, dy, dz)
         if not scattered:
-            mean_r = _mean(path.r_u, n)
+            mean_r, weight = _mean(path.r_u, n), 1.0
         else:
             light_pdf = ks.light_pmf[chosen] * infinite_pdf(ks, chosen, dx, dy, dz)
             for i in range(n):
-                light.r_l[i] = path.r_u[i] + path.r_l[i] * light_pdf
-            mean_r = _mean(light.r_l, n)
-        for i in range(n):
-            path.radiance[i] += path.beta[i] * light.radiance[i] / mean_r
+                light.r_l[i] = path.r_u[i] * survival + path.r_l[i] * light_pdf
+            mean_r, weight = _mean(light.r_l, n), survival
+        if mean_r > 0.0:
+            for i in range(n):
+                path.radiance[i] += path.beta[i] * light.radiance[i] * weight / mean_r
 
 
 @jit(inline="always")
@@ -730,12 +781,13 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, ligh
     """Transport from a camera ray, or (`emitted`) from an isotropic fluorescent emission at (ox, oy, oz)
     at vertex `depth`: collects the radiance per wavelength in `path.radiance` and offers fluorescent
     sources to `fl`."""
+    grey = _is_grey(ks, n, path.spec)
     scattered = emitted
     at_vertex = emitted
     while True:
         if at_vertex:
             if ks.light_kind.shape[0] > 0:
-                _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, n, path, vertex, light, tracker)
+                _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, grey, n, path, vertex, light, tracker)
             dx, dy, dz = _sample_phase(ks, dx, dy, dz, emitted, n, path, vertex, light)
             if dx == 0.0 and dy == 0.0 and dz == 0.0:
                 return
@@ -743,11 +795,14 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, ligh
             emitted = False
             if not _survives_roulette(ks, depth, n, path):
                 return
-        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, n, path, vertex, tracker, fl)
+        controls = grey and scattered
+        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, controls, n, path, vertex,
+                                                    tracker, fl)
         if event == EVENT_ABSORB:
             return
         if event == EVENT_ESCAPE:
-            _escape(ks, dx, dy, dz, scattered, n, path, light)
+            survival = math.exp(-_control_depth(ks, tracker, path.spec, 0)) if controls else 1.0
+            _escape(ks, dx, dy, dz, scattered, survival, n, path, light)
             return
         depth += 1
         if depth > ks.max_depth:

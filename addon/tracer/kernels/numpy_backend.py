@@ -12,7 +12,8 @@ the wavefront's loops and state.
 Free flight and shadow rays traverse each medium's majorant grid block by block, a DDA vectorised over
 rays (`_tracker_*`, the same state machine as the Numba kernel's, on the shared per-axis arithmetic of
 `dda`): each loop iteration moves every ray by one segment or one tentative collision, and rays that are
-done leave the batch. Shadow rays towards delta lights use residual ratio tracking (`_transmittance`).
+done leave the batch. Shadow rays towards delta lights and of grey paths use residual ratio tracking
+(`_transmittance`).
 
 Every path draws from the same stream of random numbers (`rng`: low-discrepancy, then hashed), in the same order
 and with the same arithmetic as the Numba kernel, so the two backends trace the same paths: images agree
@@ -29,7 +30,7 @@ from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
-from .layout import PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
+from .layout import GREY_SPREAD, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
 from .light_sampling import choose_light, incident_radiance, infinite_pdf, infinite_radiance, is_delta, sample_light
 from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
@@ -177,25 +178,24 @@ def _blocks(ks, tracker):
     return ks.majorant_offset + (cell[..., 0] * shape[:, 1] + cell[..., 1]) * shape[:, 2] + cell[..., 2]
 
 
-def _tracker_segment(ks, tracker, residual=None):
-    """(end of each ray's current segment, the rate to track against on it, control): the rate is the
-    combined majorant σ̄, or for the rays in mask `residual` the residual majorant σ̄ − σ_c, with
-    (rays, media) each medium's control σ_c, its block's minorant (scaled density; 0 outside its blocks
-    and for other rays)."""
+def _tracker_segment(ks, tracker, controls=None):
+    """(end of each ray's current segment, the combined majorant σ̄ on it, control, the controls' share of
+    σ̄): for the rays in mask `controls`, control is (rays, media) each medium's control σ_c, its block's
+    minorant (scaled density; 0 outside its blocks and for other rays), and the share Σ σ_c·coeff (σ̄ less it
+    is the residual majorant of residual ratio tracking); 0 for the other rays."""
     t_end = _tracker_boundary(tracker).min(axis=1, initial=INF)
     blocks = _blocks(ks, tracker)
     inside = tracker.phase == 1
-    bound = ks.majorant_data[blocks].astype(np.float64)
-    control = np.zeros(bound.shape)
-    if residual is not None:
-        minorant = np.where(inside & residual[:, None], ks.minorant_data[blocks].astype(np.float64), 0.0)
-        bound = bound - minorant
-        control = minorant * ks.density_scale
-    scaled = bound * ks.majorant_coeff
-    rate = np.zeros(len(tracker))
+    scaled = ks.majorant_data[blocks].astype(np.float64) * ks.majorant_coeff
+    minorant = np.zeros(scaled.shape)
+    if controls is not None:
+        minorant = np.where(inside & controls[:, None], ks.minorant_data[blocks].astype(np.float64), 0.0)
+    scaled_minorant = minorant * ks.majorant_coeff
+    sigma_bar, control_rate = np.zeros(len(tracker)), np.zeros(len(tracker))
     for m in range(ks.majorant_shape.shape[0]):
-        rate = rate + np.where(inside[:, m], scaled[:, m], 0.0)
-    return t_end, rate, control
+        sigma_bar = sigma_bar + np.where(inside[:, m], scaled[:, m], 0.0)
+        control_rate = control_rate + scaled_minorant[:, m]
+    return t_end, sigma_bar, minorant * ks.density_scale, control_rate
 
 
 def _tracker_advance(ks, tracker, moving, t_end):
@@ -219,23 +219,26 @@ def _tracker_advance(ks, tracker, moving, t_end):
         tracker.phase[rays[gone], media[gone]] = 2
 
 
-def _track(ks, paths, rows, origins, directions, t_max, collide, residual=None, travel=None):
+def _track(ks, paths, rows, origins, directions, t_max, collide, controls=None, travel=None, residual=False):
     """Tentative collisions along rays against the majorant (delta and ratio tracking share this).
 
     Ray k belongs to path `rows[k]` and draws its free-flight distances from that path's stream.
     `collide(rays, points, rate)` handles the rays (indices) that have a tentative collision (drawn at that
-    rate: σ̄ there) and returns which of them stop there; a ray also stops when it leaves every medium.
+    rate) and returns which of them stop there; a ray also stops when it leaves every medium.
 
-    Residual ratio tracking: the rays in mask `residual` draw against σ̄ less their control
-    (`_tracker_segment`), and `travel(rays, dt, control)` hears of each step before `collide`: the rays
-    that move by dt (0 for those that leave) and their control."""
+    The controls of residual ratio tracking: `travel(rays, dt, control)` hears of each step before `collide`:
+    the rays that move by dt (0 for those that leave) and, for those in mask `controls`, their control
+    (`_tracker_segment`). With `residual`, these rays draw against σ̄ less their controls' share (the
+    residual majorant); otherwise every ray draws against σ̄."""
     flight = _tracker_start(ks, origins, directions, t_max)
     flight.ray = np.arange(origins.shape[0])
     flight.t = np.zeros(origins.shape[0])
-    if residual is not None:
-        flight.residual = residual
+    if controls is not None:
+        flight.controls = controls
     while len(flight):
-        t_end, rate, control = _tracker_segment(ks, flight, None if residual is None else flight.residual)
+        t_end, sigma_bar, control, control_rate = _tracker_segment(ks, flight,
+                                                                   None if controls is None else flight.controls)
+        rate = sigma_bar - control_rate if residual else sigma_bar
         escaped = t_end == INF
         drawing = ~escaped & (rate > 0.0)
         step = np.zeros(len(flight))
@@ -330,6 +333,7 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
         lam_cam[:, i] = sample_binned(ks.lambda_cdf, ui)
         pdf_cam[:, i] = pdf_binned(ks.lambda_pdf, lam_cam[:, i])
     paths.lams[:] = lam_cam
+    paths.grey = _is_grey(ks, paths.lams)
     ray = camera_ray(ks, px, py, _draw(paths), _draw(paths))
     paths.o, paths.d = _rows(ray[:3], count), _rows(ray[3:], count)
     return paths, lam_cam, pdf_cam
@@ -371,13 +375,20 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
 def _free_flight(ks, paths, radiance, fl):
     """Delta tracking of every path to its next real event, collecting thermal emission and offering
     fluorescent sources at each tentative collision and weighting null collisions (spectral MIS ratios
-    included).
+    included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls instead of
+    putting null-event probabilities into `r_l`, as the Numba kernel's `_free_flight`.
 
-    Returns each path's event and the vertex data of scattering events (position q and the per-medium
-    σ_s at q)."""
+    Returns each path's event, the vertex data of scattering events (position q and the per-medium σ_s at
+    q) and each path's survival along its ray as a shadow ray would give it (`_transmittance`; 1 where
+    `r_l` has the null-event probabilities), for `_escape`."""
     count, n = paths.lams.shape
     vertex = _Batch(event=np.full(count, EVENT_ESCAPE, dtype=np.int8), q=np.zeros((count, 3)),
-                    medium_s=np.zeros((count, ks.density_scale.shape[0], n)))
+                    medium_s=np.zeros((count, ks.density_scale.shape[0], n)), survival=np.ones(count))
+    controls = paths.grey & paths.scattered
+    depth = np.zeros((count, ks.density_scale.shape[0]))  # the controls' integral along each ray so far
+
+    def travel(rays, dt, control):
+        depth[rays] += control * dt[:, None]
 
     def collide(rows, points, sigma_bar):
         c = _coefficients(ks, points, paths.lams[rows])
@@ -397,7 +408,7 @@ def _free_flight(ks, paths, radiance, fl):
         r_u = np.where(collided[:, None], r_u * (sigma_t / bar / p0), r_u)
         beta = np.where(null[:, None], beta * (ratio / p0), beta)
         r_u = np.where(null[:, None], r_u * (ratio / p0), r_u)
-        r_l = np.where(null[:, None], r_l / p0, r_l)
+        r_l = np.where(null[:, None] & ~controls[rows, None], r_l / p0, r_l)
         paths.beta[rows], paths.r_u[rows], paths.r_l[rows] = beta, r_u, r_l
         alive = np.any(beta > 0.0, axis=1)
         scattered = collided & alive
@@ -408,45 +419,75 @@ def _free_flight(ks, paths, radiance, fl):
         return stop
 
     fl.tau[paths.id] = 0.0
-    _track(ks, paths, np.arange(count), paths.o, paths.d, INF, collide)
+    _track(ks, paths, np.arange(count), paths.o, paths.d, INF, collide, controls=controls, travel=travel)
+    escaped = np.flatnonzero(controls & (vertex.event == EVENT_ESCAPE))
+    spectra = _attenuation_spectra(ks, paths.lams[escaped, :1])
+    vertex.survival[escaped] = np.exp(-_control_depth(depth[escaped], *spectra)[:, 0])
     return vertex
 
 
-def _escape(ks, paths, radiance):
+def _escape(ks, paths, radiance, survival):
     """Radiance of the infinite lights seen by escaping paths: plain for camera rays, MIS-weighted
-    against light sampling after a scattering vertex."""
+    against light sampling after a scattering vertex, with each path's `survival` along its ray
+    (`_free_flight`)."""
     plain_mean = _mean(paths.r_u)
     at = on_grid(paths.lams)
     directions = _columns(paths.d[:, :, None])
+    weight = np.where(paths.scattered, survival, 1.0)[:, None]
     for light in range(ks.light_kind.shape[0]):
         light_radiance = infinite_radiance(ks, light, at, *directions)
         light_pdf = ks.light_pmf[light] * infinite_pdf(ks, light, *directions)
-        mean_r = np.where(paths.scattered, _mean(paths.r_u + paths.r_l * light_pdf), plain_mean)
-        radiance[paths.id] += paths.beta * light_radiance / mean_r[:, None]
+        mean_r = np.where(paths.scattered, _mean(paths.r_u * survival[:, None] + paths.r_l * light_pdf),
+                          plain_mean)[:, None]
+        radiance[paths.id] += np.where(mean_r > 0.0, paths.beta * light_radiance * weight / mean_r, 0.0)
+
+
+def _attenuation_spectra(ks, lams):
+    """(extinction, excitation), each (rays, media, wavelengths): every medium's spectra at the rays'
+    wavelengths `lams` (rays, wavelengths)."""
+    at = on_grid(lams)
+    extinction, excitation = np.zeros((2, lams.shape[0], ks.density_scale.shape[0], lams.shape[1]))
+    for m in range(ks.density_scale.shape[0]):
+        extinction[:, m], excitation[:, m] = table_at(ks.extinction, m, at), table_at(ks.excitation, m, at)
+    return extinction, excitation
+
+
+def _control_depth(depth, extinction, excitation):
+    """(rays, wavelengths): the controls' optical depth, from each medium's integral `depth` (rays, media) of
+    its control and its spectra (`_attenuation_spectra`)."""
+    total = np.zeros((depth.shape[0], extinction.shape[2]))
+    for m in range(depth.shape[1]):
+        total = total + media.attenuation(depth[:, m, None], extinction[:, m], excitation[:, m])
+    return total
+
+
+def _is_grey(ks, lams):
+    """The Numba kernel's `_is_grey` for paths of wavelengths `lams`: a light is not a delta light and every
+    medium attenuates each path's wavelengths alike (to GREY_SPREAD)."""
+    if all(is_delta(ks, light) for light in range(ks.light_kind.shape[0])):
+        return np.zeros(lams.shape[0], dtype=bool)
+    value = media.attenuation(1.0, *_attenuation_spectra(ks, lams))
+    first = value[:, :, :1]
+    return np.all(np.abs(value - first) <= GREY_SPREAD * first, axis=(1, 2))
 
 
 def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
     """Ratio tracking along shadow rays (ray k from path rows[k]): the transmittance per wavelength and
-    the product of the unidirectional null-event probabilities σ_n/σ̄ (for MIS). The rays in mask
-    `residual` (towards delta lights) use residual ratio tracking: their blocks' minorants are integrated
-    exactly (`depth`) and only the rest is ratio-tracked. Faint rays (every transmittance, bounded with
-    the least control depth, below SHADOW_ROULETTE_BELOW) play Russian roulette at each tentative
-    collision."""
+    the unidirectional strategy's survival for MIS (the Numba kernel's `_transmittance`): the product of
+    the null-event probabilities σ_n/σ̄ at its tentative collisions. The rays in mask `residual` (towards
+    delta lights, and of grey paths) use residual ratio tracking: their blocks' minorants are integrated
+    exactly (`depth`), only the rest is ratio-tracked, and their survival is the controls' transmittance.
+    Faint rays (every transmittance, bounded with the least control depth, below SHADOW_ROULETTE_BELOW)
+    play Russian roulette at each tentative collision."""
     count, n = lams.shape
     transmittance = np.ones(lams.shape)
-    null_ratio = np.ones(lams.shape)
-    at = on_grid(lams)
-    extinction = np.stack([table_at(ks.extinction, m, at) for m in range(ks.density_scale.shape[0])], 1)
-    excitation = np.stack([table_at(ks.excitation, m, at) for m in range(ks.density_scale.shape[0])], 1)
-    depth = np.zeros((count, ks.density_scale.shape[0]))  # the control's integral along each ray so far
+    survival = np.ones(lams.shape)
+    extinction, excitation = _attenuation_spectra(ks, lams)
+    depth = np.zeros((count, ks.density_scale.shape[0]))  # the controls' integral along each ray so far
     control_now = np.zeros(depth.shape)
 
     def control_depth(rays):
-        """(rays, wavelengths): the control's optical depth so far."""
-        total = np.zeros((rays.size, n))
-        for m in range(depth.shape[1]):
-            total = total + media.attenuation(depth[rays, m, None], extinction[rays, m], excitation[rays, m])
-        return total
+        return _control_depth(depth[rays], extinction[rays], excitation[rays])
 
     def faint_survives(rays):
         """Russian roulette on the faint rays among `rays`; which of them stop."""
@@ -473,18 +514,19 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
             excess = excess + media.attenuation(rho[:, None], extinction[rays, m], excitation[rays, m])
         ratio = media.null_fraction(rate[:, None], excess, 0.0)
         transmittance[rays] *= ratio
-        null_ratio[rays] *= ratio
+        survival[rays] *= np.where(residual[rays, None], 1.0, ratio)
         return faint_survives(rays)
 
-    _track(ks, paths, rows, origins, directions, t_max, collide, residual, travel)
-    transmittance[residual] *= np.exp(-control_depth(np.flatnonzero(residual)))
-    return transmittance, null_ratio
+    _track(ks, paths, rows, origins, directions, t_max, collide, controls=residual, travel=travel, residual=True)
+    survival[residual] = np.exp(-control_depth(np.flatnonzero(residual)))
+    transmittance[residual] *= survival[residual]
+    return transmittance, survival
 
 
 def _next_event(ks, paths, vertex, isotropic, radiance):
     """Next-event estimation from every vertex: one light chosen by its pmf, ratio-tracked
-    transmittance (residual ratio tracking towards delta lights), MIS against phase sampling (balance
-    heuristic over wavelengths and strategies)."""
+    transmittance (residual ratio tracking towards delta lights and on grey paths), MIS against phase
+    sampling (balance heuristic over wavelengths and strategies)."""
     choice, u1, u2 = _draw(paths), _draw(paths), _draw(paths)
     lights = choose_light(ks.light_pmf, choice)
     sample = _sample_lights(ks, lights, paths.o, u1, u2, paths.lams)
@@ -496,11 +538,11 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
     rows = np.flatnonzero(lit)
     if rows.size == 0:
         return
-    transmittance, null_ratio = _transmittance(ks, paths, rows, paths.o[rows], sample.w[rows],
-                                               sample.distance[rows], paths.lams[rows], sample.delta[rows])
+    transmittance, survival = _transmittance(ks, paths, rows, paths.o[rows], sample.w[rows], sample.distance[rows],
+                                             paths.lams[rows], sample.delta[rows] | paths.grey[rows])
     r_u, phase_values = paths.r_u[rows], phase_values[rows]
     light_pdf = (ks.light_pmf[lights[rows]] * sample.pdf[rows])[:, None]
-    r_u_light = np.where(sample.delta[rows, None], 0.0, r_u * phase_values * null_ratio)
+    r_u_light = np.where(sample.delta[rows, None], 0.0, r_u * phase_values * survival)
     mean_r = _mean(r_u * light_pdf + r_u_light)
     counted = mean_r > 0.0
     contribution = paths.beta[rows] * phase_values * transmittance * sample.radiance[rows] / mean_r[:, None]
@@ -559,7 +601,7 @@ def _bounce(ks, paths, radiance, fl):
     vertex = _free_flight(ks, paths, radiance, fl)
     escaped = vertex.event == EVENT_ESCAPE
     if escaped.any():
-        _escape(ks, paths.take(escaped), radiance)
+        _escape(ks, paths.take(escaped), radiance, vertex.survival[escaped])
     real = (vertex.event == EVENT_SCATTER) & (paths.depth + 1 <= ks.max_depth)
     paths, vertex = paths.take(real), vertex.take(real)
     if not len(paths):
@@ -597,6 +639,7 @@ def _fluorescent_paths(ks, stream, ids, reservoir, fl):
         dyed = fl.medium[ids, chosen] == m
         paths.lams[dyed, 0] = sample_binned(ks.excitation_cdf[m], u[dyed])
         paths.beta[dyed, 0] = linear_over_binned(ks.excitation[m], paths.lams[dyed, 0])
+    paths.grey = _is_grey(ks, paths.lams)
     fl.total[ids] = 0.0
     return paths
 
