@@ -89,21 +89,33 @@ SPEC_ROWS = 5
 
 @intrinsic
 def _borrowed(typingctx, scene):
-    """The kernel scene with its arrays borrowed: the same data, without the reference counts that Numba
-    updates whenever an array is passed to a function or sliced. Those updates are atomic operations on
-    counters that every thread shares; the caller keeps the arrays alive for the whole render."""
+    """The kernel scene (or a tuple of buffers) with its arrays borrowed, at any depth of nested tuples: the
+    same data, without the reference counts that Numba updates whenever an array is passed to a function
+    or sliced. Those updates are atomic operations on counters that every thread shares; the caller keeps
+    the arrays alive for the whole render."""
 
     def codegen(context, builder, signature, args):
-        (value,) = args
-        for index, member in enumerate(signature.args[0]):
-            if isinstance(member, types.Array):
-                array = context.make_array(member)(context, builder, builder.extract_value(value, index))
-                array.meminfo = cgutils.get_null_value(array.meminfo.type)
-                array.parent = cgutils.get_null_value(array.parent.type)
-                value = builder.insert_value(value, array._getvalue(), index)
-        return value
+        return _borrow(context, builder, signature.args[0], args[0])
 
     return scene(scene), codegen
+
+
+def _borrow(context, builder, kind, value):
+    """`_borrowed`'s code for a `value` of Numba type `kind`: an array with null reference-count (`meminfo`)
+    and owner (`parent`) pointers, or a tuple with each of its arrays and tuples borrowed. Every array must be:
+    Numba takes the result for a new reference and releases it, so an array still counted would be released
+    once too often (freed while in use)."""
+    if isinstance(kind, types.Array):
+        array = context.make_array(kind)(context, builder, value)
+        array.meminfo = cgutils.get_null_value(array.meminfo.type)
+        array.parent = cgutils.get_null_value(array.parent.type)
+        return array._getvalue()
+    if isinstance(kind, types.BaseTuple):
+        for index, member in enumerate(kind):
+            if isinstance(member, (types.Array, types.BaseTuple)):
+                borrowed = _borrow(context, builder, member, builder.extract_value(value, index))
+                value = builder.insert_value(value, borrowed, index)
+    return value
 
 
 
