@@ -33,6 +33,8 @@ _WRAPPERS = '''
 # ---- bench/counting.py: per-thread counters around three functions (resolved when first compiled)
 from numba import get_thread_id as _bench_thread_id
 
+from bench.counting import CountingScene
+
 _density_uncounted = density
 _transmittance_uncounted = _transmittance
 _tracker_advance_uncounted = _tracker_advance
@@ -56,24 +58,31 @@ def _tracker_advance(ks, tracker, t_end):
     _tracker_advance_uncounted(ks, tracker, t_end)
 '''
 
-CountingScene = namedtuple("CountingScene", KernelScene._fields + ("bench_counters",))
+# The counters and the kernel scene's groups (`ks.camera`, `ks.majorant`, ...): the copy reads the groups by
+# name, as the kernel does, and `_borrowed` borrows the counters with the groups' arrays.
+CountingScene = namedtuple("CountingScene", ("bench_counters",) + KernelScene._fields)
 # The lines the wrappers mirror (the call of the shared `density`, the definitions of the others): a changed
 # signature refuses the copy instead of failing to compile.
-_CHECKED = ("rho = density(ks, m, px, py, pz) * ks.density_scale[m]",
+_CHECKED = ("rho = density(ks, m, px, py, pz) * ks.media.density_scale[m]",
             "def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, tracker):",
             "def _tracker_advance(ks, tracker, t_end):")
+# The parallel loop takes the kernel scene's groups one by one (`numba_backend._render_runs`): the counters go
+# through it as one more, first.
+_THROUGH_THE_LOOP = (("    _render_runs(ks.camera,", "    _render_runs(ks.bench_counters, ks.camera,"),
+                     ("def _render_runs(camera,", "def _render_runs(bench_counters, camera,"),
+                     ("ks = KernelScene(camera,", "ks = CountingScene(bench_counters, camera,"))
 
 
 def counting_backend(folder: Path):
     """The instrumented kernel module (see the module docstring)."""
     # Replacing each line by itself checks that the three functions are still there.
-    return kernel_copy("counting", folder, [(name, name) for name in _CHECKED], _WRAPPERS)
+    return kernel_copy("counting", folder, [(name, name) for name in _CHECKED] + list(_THROUGH_THE_LOOP), _WRAPPERS)
 
 
 def count(kernel_scene: KernelScene, spp: int, seed: int, folder: Path, first_sample: int = 0) -> dict:
     """Totals of COUNTERS over samples [first_sample, first_sample + spp) of every pixel."""
     counters = np.zeros(numba.config.NUMBA_NUM_THREADS * _STRIDE, dtype=np.int64)
-    renderer = CopyRenderer(counting_backend(folder), CountingScene(*kernel_scene, counters), seed)
+    renderer = CopyRenderer(counting_backend(folder), CountingScene(counters, *kernel_scene), seed)
     renderer.next_sample = first_sample
     renderer.render(spp)
     per_thread = counters.reshape(-1, _STRIDE)

@@ -58,7 +58,7 @@ class CopyRenderer:
         self.module, self.kernel_scene, self.seed, self.next_sample = module, kernel_scene, seed, 0
 
     def render(self, spp: int) -> Image:
-        width, height = self.kernel_scene.width, self.kernel_scene.height
+        width, height = self.kernel_scene.camera.width, self.kernel_scene.camera.height
         film = Film(width, height)
         seconds = 0.0
         for size in pass_sizes(spp, first=min(16, spp)):

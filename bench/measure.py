@@ -126,15 +126,16 @@ def warm_up(kernel_scene: KernelScene) -> float:
     """Compile the kernel (or load it from Numba's cache), then render one untimed sample of the whole
     image (threads started, memory touched); seconds taken."""
     start = time.perf_counter()
-    render_unit(kernel_scene, 0, (0, 1), (0, 0, min(2, kernel_scene.width), min(2, kernel_scene.height)), 0)
-    render_unit(kernel_scene, 0, (0, 1), (0, 0, kernel_scene.width, kernel_scene.height), 1)
+    width, height = kernel_scene.camera.width, kernel_scene.camera.height
+    render_unit(kernel_scene, 0, (0, 1), (0, 0, min(2, width), min(2, height)), 0)
+    render_unit(kernel_scene, 0, (0, 1), (0, 0, width, height), 1)
     return time.perf_counter() - start
 
 
 def render_ours(kernel_scene: KernelScene, spp: int, seed: int = 0, first_sample: int = 0) -> Image:
     """Samples [first_sample, first_sample + spp) of every pixel, in passes of up to 16 samples as
     `render.render` does; `seconds` is the kernel time only."""
-    width, height = kernel_scene.width, kernel_scene.height
+    width, height = kernel_scene.camera.width, kernel_scene.camera.height
     film = Film(width, height)
     seconds = 0.0
     begin = first_sample

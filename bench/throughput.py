@@ -128,7 +128,8 @@ def count_lookups(rows: list[dict], args, cache) -> None:
                                       height=args.height), density, seed=0)
         kernel_scene = compile_scene(scene)
         if start is not None:
-            counting.count(kernel_scene._replace(width=2, height=2), 1, 0, folder)
+            tiny = kernel_scene._replace(camera=kernel_scene.camera._replace(width=2, height=2))
+            counting.count(tiny, 1, 0, folder)
             print(f"  counting kernel compiled or loaded in {time.perf_counter() - start:.1f} s")
             start = None
         counts = counting.count(kernel_scene, args.count_spp, 0, folder)

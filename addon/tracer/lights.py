@@ -1,5 +1,5 @@
 """Light policies: what a light's `strength` means in its unit (`strength_scale`), and how often next-event
-estimation chooses each light (`selection_powers`, which the lowering normalises to `KernelScene.light_pmf`).
+estimation chooses each light (`selection_powers`, which the lowering normalises to `KernelScene.lights.pmf`).
 """
 
 import numpy as np

@@ -10,7 +10,21 @@ import numpy as np
 
 from . import colorimetry, sampling
 from .errors import SpectralError
-from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, PHASES, KernelScene
+from .kernels.layout import (
+    CAMERA_KINDS,
+    LIGHT_KINDS,
+    PHASES,
+    KernelCamera,
+    KernelDensity,
+    KernelFluorescence,
+    KernelLights,
+    KernelMajorant,
+    KernelMedia,
+    KernelScene,
+    KernelTemperature,
+    KernelTermination,
+    KernelWavelengths,
+)
 from .kernels.media import attenuation
 from .lights import selection_powers, strength_scale
 from .majorant import block_size_for, majorant_grid, minorant_grid
@@ -40,101 +54,111 @@ def _flatten(arrays):
 
 
 def _media_arrays(media: tuple[Medium, ...]) -> dict:
+    """The kernel scene's groups that describe the media, by name: `density`, `majorant`, `temperature`,
+    `media` and `fluorescence`."""
     count = len(media)
     levels = max([m.albedo_densities.size for m in media], default=1)
-    out = {
-        "density_scale": np.array([m.density_scale for m in media], dtype=np.float64),
-        "extinction": np.array([m.extinction.values for m in media]).reshape(count, GRID.size),
-        "excitation": np.zeros((count, GRID.size)),
-        "excitation_mean": np.zeros(count),
-        "anisotropy": np.array([m.anisotropy.values for m in media]).reshape(count, GRID.size),
-        "phase_kind": np.array([PHASES.index(m.phase) for m in media], dtype=np.int64),
-        "albedo_densities": np.zeros((count, levels)),
-        "albedo_count": np.array([m.albedo_densities.size for m in media], dtype=np.int64),
-        "albedo_table": np.zeros((count, levels, GRID.size)),
-        "fluor_strength": np.zeros(count),
-        "emission_pdf": np.zeros((count, GRID.size)),
-        "excitation_cdf": np.zeros((count, GRID.size)),
-        "excitation_pdf": np.zeros((count, GRID.size - 1)),
-        "temperature_offset": np.full(count, -1, dtype=np.int64),
-        "temperature_world_to_padded": np.tile(np.eye(4), (count, 1, 1)),
-        "temperature_map": np.zeros((count, 3)),
-    }
+    optics = KernelMedia(
+        density_scale=np.array([m.density_scale for m in media], dtype=np.float64),
+        extinction=np.array([m.extinction.values for m in media]).reshape(count, GRID.size),
+        anisotropy=np.array([m.anisotropy.values for m in media]).reshape(count, GRID.size),
+        phase_kind=np.array([PHASES.index(m.phase) for m in media], dtype=np.int64),
+        albedo_densities=np.zeros((count, levels)),
+        albedo_count=np.array([m.albedo_densities.size for m in media], dtype=np.int64),
+        albedo_table=np.zeros((count, levels, GRID.size)),
+    )
+    fluorescence = KernelFluorescence(
+        excitation=np.zeros((count, GRID.size)),
+        excitation_mean=np.zeros(count),
+        strength=np.zeros(count),
+        emission_pdf=np.zeros((count, GRID.size)),
+        excitation_cdf=np.zeros((count, GRID.size)),
+        excitation_pdf=np.zeros((count, GRID.size - 1)),
+    )
     for index, medium in enumerate(media):
         n = medium.albedo_densities.size
-        out["albedo_densities"][index, :n] = medium.albedo_densities
-        out["albedo_table"][index, :n] = medium.albedo_table
+        optics.albedo_densities[index, :n] = medium.albedo_densities
+        optics.albedo_table[index, :n] = medium.albedo_table
         if medium.fluorescence is not None:
-            fluorescence = medium.fluorescence
-            out["excitation"][index] = fluorescence.excitation.values
-            total = fluorescence.excitation.integral()
-            emission_total = fluorescence.emission.integral()
-            out["fluor_strength"][index] = fluorescence.quantum_yield * total
-            out["excitation_mean"][index] = np.trapezoid(fluorescence.excitation.values ** 2, GRID) / total
-            out["emission_pdf"][index] = fluorescence.emission.values / emission_total
-            excitation = sampling.from_spectrum(fluorescence.excitation, LAMBDA_MIN, LAMBDA_MAX)
-            out["excitation_cdf"][index] = excitation.cdf
-            out["excitation_pdf"][index] = excitation.bin_pdf
-    peak = attenuation(1.0, out["extinction"], out["excitation"])  # σ_t per unit density, as tracking sees it
-    out["majorant_coeff"] = out["density_scale"] * (peak.max(axis=1) if count else np.zeros(0))
+            dye = medium.fluorescence
+            fluorescence.excitation[index] = dye.excitation.values
+            total = dye.excitation.integral()
+            emission_total = dye.emission.integral()
+            fluorescence.strength[index] = dye.quantum_yield * total
+            fluorescence.excitation_mean[index] = np.trapezoid(dye.excitation.values ** 2, GRID) / total
+            fluorescence.emission_pdf[index] = dye.emission.values / emission_total
+            excitation = sampling.from_spectrum(dye.excitation, LAMBDA_MIN, LAMBDA_MAX)
+            fluorescence.excitation_cdf[index] = excitation.cdf
+            fluorescence.excitation_pdf[index] = excitation.bin_pdf
+    peak = attenuation(1.0, optics.extinction, fluorescence.excitation)  # σ_t per unit density, as tracking sees it
 
     densities = [np.asarray(m.density.values, dtype=np.float32) for m in media]
-    out["density_data"], out["density_offset"], out["density_shape"] = _flatten(densities)
-    out["world_to_padded"] = np.array([_world_to_padded(m.density) for m in media]).reshape(count, 4, 4)
+    density = KernelDensity(*_flatten(densities),
+                            world_to_padded=np.array([_world_to_padded(m.density) for m in media]).reshape(count, 4, 4))
     blocks = [block_size_for(d.shape) for d in densities]
     majorants = [majorant_grid(d, b) for d, b in zip(densities, blocks)]
-    out["majorant_data"], out["majorant_offset"], out["majorant_shape"] = _flatten(majorants)
-    out["majorant_block"] = np.array(blocks, dtype=np.int64)
-    out["minorant_data"] = _flatten([minorant_grid(d, b) for d, b in zip(densities, blocks)])[0]
+    majorant = KernelMajorant(*_flatten(majorants),
+                              block=np.array(blocks, dtype=np.int64),
+                              coeff=optics.density_scale * (peak.max(axis=1) if count else np.zeros(0)),
+                              minorant=_flatten([minorant_grid(d, b) for d, b in zip(densities, blocks)])[0])
+    return {"density": density, "majorant": majorant, "temperature": _temperature_grids(media), "media": optics,
+            "fluorescence": fluorescence}
 
+
+def _temperature_grids(media: tuple[Medium, ...]) -> KernelTemperature:
+    """The emitting media's temperature grids, one after another (offset -1 for a medium without emission)."""
+    count = len(media)
+    offset = np.full(count, -1, dtype=np.int64)
+    world_to_padded = np.tile(np.eye(4), (count, 1, 1))
+    temperature_map = np.zeros((count, 3))
     temperatures = []
     for index, medium in enumerate(media):
         if medium.emission is None:
             continue
         emission = medium.emission
-        out["temperature_offset"][index] = sum(t.size for t in temperatures)
+        offset[index] = sum(t.size for t in temperatures)
         temperatures.append(np.asarray(emission.temperature.values, dtype=np.float32))
-        out["temperature_world_to_padded"][index] = _world_to_padded(emission.temperature)
-        out["temperature_map"][index] = (emission.temperature_scale, emission.temperature_offset, emission.intensity)
-    out["temperature_data"] = _flatten(temperatures)[0]
-    out["temperature_shape"] = np.zeros((count, 3), dtype=np.int64)
+        world_to_padded[index] = _world_to_padded(emission.temperature)
+        temperature_map[index] = (emission.temperature_scale, emission.temperature_offset, emission.intensity)
+    shape = np.zeros((count, 3), dtype=np.int64)
     for index, medium in enumerate(media):
         if medium.emission is not None:
-            out["temperature_shape"][index] = medium.emission.temperature.values.shape
-    return out
+            shape[index] = medium.emission.temperature.values.shape
+    return KernelTemperature(data=_flatten(temperatures)[0], offset=offset, shape=shape,
+                             world_to_padded=world_to_padded, map=temperature_map)
 
 
-def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str) -> dict:
+def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str) -> KernelLights:
     count = len(lights)
     out = {
-        "light_kind": np.array([LIGHT_KINDS.index(light.kind) for light in lights], dtype=np.int64),
-        "light_spd": np.array([light.spectrum.values * strength_scale(light, cmf=cmf) for light in lights]).reshape(
+        "kind": np.array([LIGHT_KINDS.index(light.kind) for light in lights], dtype=np.int64),
+        "spd": np.array([light.spectrum.values * strength_scale(light, cmf=cmf) for light in lights]).reshape(
             count, GRID.size),
-        "light_spd_horizon": np.zeros((count, GRID.size)),
-        "light_dir": np.zeros((count, 3)),
-        "light_pos": np.zeros((count, 3)),
-        "light_cos": np.ones(count),
-        "light_smooth": np.zeros(count),
+        "spd_horizon": np.zeros((count, GRID.size)),
+        "dir": np.zeros((count, 3)),
+        "pos": np.zeros((count, 3)),
+        "cos": np.ones(count),
+        "smooth": np.zeros(count),
     }
     for index, light in enumerate(lights):
         if light.kind == "sun":
-            out["light_dir"][index] = light.direction / np.linalg.norm(light.direction)
-            out["light_cos"][index] = np.cos(0.5 * light.angle)
+            out["dir"][index] = light.direction / np.linalg.norm(light.direction)
+            out["cos"][index] = np.cos(0.5 * light.angle)
         elif light.kind == "sky":
             horizon = light.horizon_spectrum or light.spectrum
-            out["light_spd_horizon"][index] = horizon.values * strength_scale(light, horizon, cmf)
+            out["spd_horizon"][index] = horizon.values * strength_scale(light, horizon, cmf)
         elif light.kind in ("point", "spot"):
-            out["light_pos"][index] = light.position
+            out["pos"][index] = light.position
             if light.kind == "spot":
                 axis = np.asarray(light.spot_direction, dtype=np.float64)
-                out["light_dir"][index] = axis / np.linalg.norm(axis)
+                out["dir"][index] = axis / np.linalg.norm(axis)
                 cos_half = np.cos(0.5 * light.spot_size)
-                out["light_cos"][index] = cos_half
-                out["light_smooth"][index] = (1.0 - cos_half) * light.spot_blend
-    power = selection_powers(lights, out["light_spd"], media, cmf)
-    out["light_pmf"] = power / power.sum() if count else power
-    out["light_power"] = power
-    return out
+                out["cos"][index] = cos_half
+                out["smooth"][index] = (1.0 - cos_half) * light.spot_blend
+    power = selection_powers(lights, out["spd"], media, cmf)
+    out["pmf"] = power / power.sum() if count else power
+    out["power"] = power
+    return KernelLights(**out)
 
 
 def camera_extent(camera) -> np.ndarray:
@@ -153,22 +177,23 @@ def compile_scene(scene: Scene) -> KernelScene:
     """The kernel data for the whole wavelength range of a valid scene (`Scene.validate`, called here);
     `wavelength_modes.with_band` restricts it to one band."""
     settings = scene.validate().settings
-    media = _media_arrays(scene.media)
-    lights = _light_arrays(scene.lights, scene.media, settings.cmf)
     camera = scene.camera
     kernel_scene = KernelScene(
-        cam_to_world=np.asarray(camera.to_world, dtype=np.float64),
-        cam_kind=CAMERA_KINDS.index(camera.kind),
-        width=int(camera.width),
-        height=int(camera.height),
-        cam_extent=camera_extent(camera),
-        **media,
-        **lights,
-        lambda_cdf=np.zeros(GRID.size),
-        lambda_pdf=np.zeros(GRID.size - 1),
-        wavelengths_per_path=int(settings.wavelengths_per_path),
-        xyz_weights=colorimetry.xyz_weights(settings.cmf),
-        max_depth=int(settings.max_depth),
-        rr_depth=int(settings.rr_depth),
+        camera=KernelCamera(
+            to_world=np.asarray(camera.to_world, dtype=np.float64),
+            kind=CAMERA_KINDS.index(camera.kind),
+            width=int(camera.width),
+            height=int(camera.height),
+            extent=camera_extent(camera),
+        ),
+        **_media_arrays(scene.media),
+        lights=_light_arrays(scene.lights, scene.media, settings.cmf),
+        wavelengths=KernelWavelengths(
+            cdf=np.zeros(GRID.size),
+            pdf=np.zeros(GRID.size - 1),
+            per_path=int(settings.wavelengths_per_path),
+            xyz_weights=colorimetry.xyz_weights(settings.cmf),
+        ),
+        termination=KernelTermination(max_depth=int(settings.max_depth), rr_depth=int(settings.rr_depth)),
     )
     return with_band(kernel_scene, settings.wavelength_sampling, *default_band(settings))

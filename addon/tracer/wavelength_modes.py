@@ -27,19 +27,19 @@ def light_mode_sources(kernel_scene: KernelScene) -> list[tuple[Spectrum, float]
     emission spectrum weighing 1 each."""
     ks = kernel_scene
     sources = []
-    for kind, spd, horizon, pmf in zip(ks.light_kind, ks.light_spd, ks.light_spd_horizon, ks.light_pmf):
+    for kind, spd, horizon, pmf in zip(ks.lights.kind, ks.lights.spd, ks.lights.spd_horizon, ks.lights.pmf):
         if kind == LIGHT_SKY:
             sources += [(Spectrum(spd), 0.5 * pmf), (Spectrum(horizon), 0.5 * pmf)]
         else:
             sources.append((Spectrum(spd), pmf))
-    for m, offset in enumerate(ks.temperature_offset):
+    for m, offset in enumerate(ks.temperature.offset):
         if offset >= 0:
-            size = int(np.prod(ks.temperature_shape[m]))
-            scale, shift, _ = ks.temperature_map[m]
-            hottest = scale * float(ks.temperature_data[offset:offset + size].max(initial=0.0)) + shift
+            size = int(np.prod(ks.temperature.shape[m]))
+            scale, shift, _ = ks.temperature.map[m]
+            hottest = scale * float(ks.temperature.data[offset:offset + size].max(initial=0.0)) + shift
             if hottest > 0:
                 sources.append((Spectrum(planck_radiance(GRID, min(hottest, BLACKBODY_SHAPE_MAX_KELVIN))), 1.0))
-    sources += [(Spectrum(pdf), 1.0) for pdf in ks.emission_pdf if pdf.any()]
+    sources += [(Spectrum(pdf), 1.0) for pdf in ks.fluorescence.emission_pdf if pdf.any()]
     return sources
 
 
@@ -48,14 +48,14 @@ def wavelength_distribution(mode: str, kernel_scene: KernelScene, lo: float, hi:
     if mode in ("uniform", "uv"):
         return sampling.uniform(lo, hi)
     if mode == "colour":
-        return sampling.colour_distribution(kernel_scene.xyz_weights, lo, hi)
+        return sampling.colour_distribution(kernel_scene.wavelengths.xyz_weights, lo, hi)
     if mode == "visible":
         return sampling.visible_distribution(lo, hi)
     if mode == "d65_rejection":
         return sampling.d65(lo, hi)
     if mode == "light":
         return sampling.defensive_composite(light_mode_sources(kernel_scene),
-                                            sampling.colour_distribution(kernel_scene.xyz_weights, lo, hi),
+                                            sampling.colour_distribution(kernel_scene.wavelengths.xyz_weights, lo, hi),
                                             LIGHT_MODE_DEFENSIVE_SHARE)
     raise SpectralError(f"unknown wavelength sampling {mode!r}")
 
@@ -69,5 +69,6 @@ def default_band(settings) -> tuple[float, float]:
 def with_band(kernel_scene: KernelScene, mode: str, lo: float, hi: float) -> KernelScene:
     """The same kernel data with the hero wavelength drawn from [lo, hi] by `mode`."""
     distribution = wavelength_distribution(mode, kernel_scene, lo, hi)
-    return kernel_scene._replace(lambda_cdf=np.asarray(distribution.cdf, dtype=np.float64),
-                                 lambda_pdf=np.asarray(distribution.bin_pdf, dtype=np.float64))
+    wavelengths = kernel_scene.wavelengths._replace(cdf=np.asarray(distribution.cdf, dtype=np.float64),
+                                                    pdf=np.asarray(distribution.bin_pdf, dtype=np.float64))
+    return kernel_scene._replace(wavelengths=wavelengths)

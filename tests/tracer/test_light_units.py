@@ -34,16 +34,16 @@ def test_radiant_strength_is_the_integral_over_the_whole_spectrum():
     lights, _ = _lights("radiant")
     lights = [Light(**{**light.__dict__, "unit": "radiant"}) for light in lights]
     ks = _compiled(lights)
-    assert np.allclose(np.trapezoid(ks.light_spd, GRID, axis=1), 2.5, rtol=1e-12)
-    assert np.trapezoid(ks.light_spd_horizon[2], GRID) == pytest.approx(2.5, rel=1e-12)
+    assert np.allclose(np.trapezoid(ks.lights.spd, GRID, axis=1), 2.5, rtol=1e-12)
+    assert np.trapezoid(ks.lights.spd_horizon[2], GRID) == pytest.approx(2.5, rel=1e-12)
 
 
 @pytest.mark.parametrize("cmf", colorimetry.CMF_NAMES)
 def test_luminous_strength_is_the_luminance_with_the_chosen_colour_matching_functions(cmf):
     lights, _ = _lights("luminous")
     ks = _compiled(lights, cmf=cmf)
-    assert np.allclose(colorimetry.spectrum_to_xyz(ks.light_spd, cmf)[:, 1], 2.5, rtol=1e-12)
-    assert colorimetry.spectrum_to_xyz(ks.light_spd_horizon[2], cmf)[1] == pytest.approx(2.5, rel=1e-12)
+    assert np.allclose(colorimetry.spectrum_to_xyz(ks.lights.spd, cmf)[:, 1], 2.5, rtol=1e-12)
+    assert colorimetry.spectrum_to_xyz(ks.lights.spd_horizon[2], cmf)[1] == pytest.approx(2.5, rel=1e-12)
 
 
 def test_strength_one_illuminant_a_renders_luminance_one_with_wyman1():
@@ -62,7 +62,7 @@ def test_a_uv_lamp_in_watts_is_chosen_for_next_event_estimation():
     radiant power, not zero (a zero probability would lose its fluorescence)."""
     lamp = Light(kind="environment", spectrum=UV_LAMP, strength=580.0, unit="radiant")
     ks = _compiled([lamp, s.environment(1.0)])
-    assert ks.light_pmf == pytest.approx([0.5, 0.5], rel=1e-12)
+    assert ks.lights.pmf == pytest.approx([0.5, 0.5], rel=1e-12)
 
 
 def test_a_luminous_light_with_no_visible_part_is_refused_naming_the_light():

@@ -4,7 +4,8 @@ reservoirs, each guided differently, combined by one-sample MIS (a mixture of th
 Every tentative collision i offers its fluorescent source, weight w_i (the collision estimator of the
 source, `_offer_fluorescence`), to three one-slot reservoirs; reservoir k keeps it with probability
 w_i g_k(τ_i) / W_k, where W_k = Σ_j w_j g_k(τ_j) so far and τ_i is the dyes' optical depth (at a typical
-excitation wavelength, `KernelScene.excitation_mean`) from the start of the path's segment to the collision:
+excitation wavelength, `KernelScene.fluorescence.excitation_mean`) from the start of the path's segment to
+the collision:
 
 - g₀ = 1: in proportion to the source alone (uniform through a uniform dye);
 - g₁ = exp(−τ): towards the segment's start (the face of a dense dye the ray entered, lit from there);

@@ -37,15 +37,15 @@ def normalize(x, y, z):
 @shared
 def camera_ray(ks, px, py, u1, u2):
     """Origin and unit direction (ox, oy, oz, dx, dy, dz) of the ray through the film point (px + u1, py + u2)
-    of pixel (px, py) (a box filter), in Blender's camera conventions: the film spans `cam_extent` at z = −1
+    of pixel (px, py) (a box filter), in Blender's camera conventions: the film spans `camera.extent` at z = −1
     (perspective) or at the camera (orthographic), the camera looking along −z."""
-    cx = (-0.5 + (px + u1) / ks.width) * ks.cam_extent[0] + ks.cam_extent[2]
-    cy = (0.5 - (py + u2) / ks.height) * ks.cam_extent[1] + ks.cam_extent[3]
-    if ks.cam_kind == CAMERA_PERSPECTIVE:
-        ox, oy, oz = transform_point(ks.cam_to_world, 0.0, 0.0, 0.0)
-        dx, dy, dz = transform_vector(ks.cam_to_world, cx, cy, -1.0)
+    cx = (-0.5 + (px + u1) / ks.camera.width) * ks.camera.extent[0] + ks.camera.extent[2]
+    cy = (0.5 - (py + u2) / ks.camera.height) * ks.camera.extent[1] + ks.camera.extent[3]
+    if ks.camera.kind == CAMERA_PERSPECTIVE:
+        ox, oy, oz = transform_point(ks.camera.to_world, 0.0, 0.0, 0.0)
+        dx, dy, dz = transform_vector(ks.camera.to_world, cx, cy, -1.0)
     else:
-        ox, oy, oz = transform_point(ks.cam_to_world, cx, cy, 0.0)
-        dx, dy, dz = transform_vector(ks.cam_to_world, 0.0, 0.0, -1.0)
+        ox, oy, oz = transform_point(ks.camera.to_world, cx, cy, 0.0)
+        dx, dy, dz = transform_vector(ks.camera.to_world, 0.0, 0.0, -1.0)
     dx, dy, dz = normalize(dx, dy, dz)
     return ox, oy, oz, dx, dy, dz

@@ -31,62 +31,116 @@ SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
 GREY_SPREAD = 1e-9
 
 
-class KernelScene(NamedTuple):
-    """The flat arrays the kernels read, for one wavelength band (`lowering.compile_scene` builds it).
+class KernelCamera(NamedTuple):
+    """The camera: its pose, kind and film."""
 
-    Its fields are part of the compiled kernel: Numba keys a cached kernel by this class and its fields'
-    types, not by their names, so the fields are defined here, in the kernel cache's key."""
-
-    # camera
-    cam_to_world: np.ndarray  # (4, 4)
-    cam_kind: int
+    to_world: np.ndarray  # (4, 4)
+    kind: int
     width: int
     height: int
-    cam_extent: np.ndarray  # (4,): film extent x, y and shift x, y (camera-space units at z = -1 or ortho)
-    # media (M); grids flattened into one array each with offsets and shapes
-    density_data: np.ndarray
-    density_offset: np.ndarray
-    density_shape: np.ndarray  # (M, 3)
+    extent: np.ndarray  # (4,): film extent x, y and shift x, y (camera-space units at z = -1 or ortho)
+
+
+class KernelDensity(NamedTuple):
+    """The media's (M) density grids, flattened into one array with each grid's offset and shape."""
+
+    data: np.ndarray
+    offset: np.ndarray
+    shape: np.ndarray  # (M, 3)
     world_to_padded: np.ndarray  # (M, 4, 4): world → padded index space of the density grid
-    majorant_data: np.ndarray
-    majorant_offset: np.ndarray
-    majorant_shape: np.ndarray  # (M, 3)
-    majorant_block: np.ndarray  # (M,) cells per block
-    majorant_coeff: np.ndarray  # (M,) density_scale · max over λ of (extinction + excitation)
-    minorant_data: np.ndarray  # the blocks' minimum density, laid out as majorant_data
+
+
+class KernelMajorant(NamedTuple):
+    """The media's majorant grids (each block's maximum density), flattened like `KernelDensity`, and the
+    minorant grids (each block's minimum density), laid out as the majorant grids."""
+
+    data: np.ndarray
+    offset: np.ndarray
+    shape: np.ndarray  # (M, 3)
+    block: np.ndarray  # (M,) cells per block
+    coeff: np.ndarray  # (M,) density_scale · max over λ of (extinction + excitation)
+    minorant: np.ndarray  # the blocks' minimum density, laid out as `data`
+
+
+class KernelTemperature(NamedTuple):
+    """The emitting media's temperature grids, flattened like `KernelDensity`, and how each maps to kelvin
+    and emission."""
+
+    data: np.ndarray
+    offset: np.ndarray  # (M,) -1 when the medium has no emission
+    shape: np.ndarray  # (M, 3)
+    world_to_padded: np.ndarray  # (M, 4, 4)
+    map: np.ndarray  # (M, 3): scale, offset, intensity
+
+
+class KernelMedia(NamedTuple):
+    """Each medium's density scale, extinction, phase function and albedo, tabulated on the grid."""
+
     density_scale: np.ndarray  # (M,)
     extinction: np.ndarray  # (M, GRID)
-    excitation: np.ndarray  # (M, GRID) fluorophore absorption per unit density
-    excitation_mean: np.ndarray  # (M,) ∫excitation² / ∫excitation: a typical λ_in's absorption (reservoir guide)
     anisotropy: np.ndarray  # (M, GRID)
     phase_kind: np.ndarray  # (M,)
     albedo_densities: np.ndarray  # (M, Lmax)
     albedo_count: np.ndarray  # (M,)
     albedo_table: np.ndarray  # (M, Lmax, GRID)
-    fluor_strength: np.ndarray  # (M,) quantum_yield · ∫excitation dλ
+
+
+class KernelFluorescence(NamedTuple):
+    """Each medium's fluorophore (all zero without one): its absorption, strength and emission, and the
+    distribution of the excitation wavelength λ_in."""
+
+    excitation: np.ndarray  # (M, GRID) fluorophore absorption per unit density
+    excitation_mean: np.ndarray  # (M,) ∫excitation² / ∫excitation: a typical λ_in's absorption (reservoir guide)
+    strength: np.ndarray  # (M,) quantum_yield · ∫excitation dλ
     emission_pdf: np.ndarray  # (M, GRID) fluorescence emission pdf per nm
     excitation_cdf: np.ndarray  # (M, GRID) binned cdf for sampling λ_in ∝ excitation
     excitation_pdf: np.ndarray  # (M, GRID - 1)
-    temperature_data: np.ndarray
-    temperature_offset: np.ndarray  # (M,) -1 when the medium has no emission
-    temperature_shape: np.ndarray  # (M, 3)
-    temperature_world_to_padded: np.ndarray  # (M, 4, 4)
-    temperature_map: np.ndarray  # (M, 3): scale, offset, intensity
-    # lights (NL)
-    light_kind: np.ndarray
-    light_spd: np.ndarray  # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky), intensity (point/spot)
-    light_spd_horizon: np.ndarray  # (NL, GRID) sky only
-    light_dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots
-    light_pos: np.ndarray  # (NL, 3)
-    light_cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
-    light_smooth: np.ndarray  # (NL,) spot edge width in cosine
-    light_pmf: np.ndarray  # (NL,) selection probability for next-event estimation
-    light_power: np.ndarray  # (NL,) selection power (`lights.selection_powers`) that `light_pmf` normalises
-    # wavelengths and colour
-    lambda_cdf: np.ndarray  # (GRID,) binned cdf of the hero wavelength in this band
-    lambda_pdf: np.ndarray  # (GRID - 1,)
-    wavelengths_per_path: int
+
+
+class KernelLights(NamedTuple):
+    """The lights (NL): their kind, spectra and geometry, and how next-event estimation selects them."""
+
+    kind: np.ndarray
+    spd: np.ndarray  # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky), intensity (point/spot)
+    spd_horizon: np.ndarray  # (NL, GRID) sky only
+    dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots
+    pos: np.ndarray  # (NL, 3)
+    cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
+    smooth: np.ndarray  # (NL,) spot edge width in cosine
+    pmf: np.ndarray  # (NL,) selection probability for next-event estimation
+    power: np.ndarray  # (NL,) selection power (`lights.selection_powers`) that `pmf` normalises
+
+
+class KernelWavelengths(NamedTuple):
+    """The camera's wavelengths and colour: the hero wavelength's distribution in this band, the
+    wavelengths per path and the XYZ weights."""
+
+    cdf: np.ndarray  # (GRID,) binned cdf of the hero wavelength in this band
+    pdf: np.ndarray  # (GRID - 1,)
+    per_path: int
     xyz_weights: np.ndarray  # (3, GRID)
-    # path settings
+
+
+class KernelTermination(NamedTuple):
+    """When a path ends: its greatest depth and the depth from which it plays Russian roulette."""
+
     max_depth: int
     rr_depth: int
+
+
+class KernelScene(NamedTuple):
+    """The arrays the kernels read, for one wavelength band (`lowering.compile_scene` builds it), grouped
+    by concept in the NamedTuples above (`ks.camera.width`, `ks.majorant.data`, `ks.lights.pmf`, ...).
+
+    Its classes are part of the compiled kernel: Numba keys a cached kernel by these classes and their
+    fields' types, not by their names, so they are defined here, in the kernel cache's key."""
+
+    camera: KernelCamera
+    density: KernelDensity
+    majorant: KernelMajorant
+    temperature: KernelTemperature
+    media: KernelMedia
+    fluorescence: KernelFluorescence
+    lights: KernelLights
+    wavelengths: KernelWavelengths
+    termination: KernelTermination

@@ -1,5 +1,5 @@
 """Lights at a point: the choice of a light for next-event estimation by its selection pmf
-(`KernelScene.light_pmf`), a direction sampled towards it with its pdf and the radiance arriving along it,
+(`KernelScene.lights.pmf`), a direction sampled towards it with its pdf and the radiance arriving along it,
 and the radiance and sampling pdf of the infinite lights along a direction that a path escapes in.
 
 Plain arithmetic shared by both backends (`shared_math`): one path's scalars in the Numba kernel, arrays of
@@ -32,23 +32,23 @@ def choose_light(pmf, u):
 @shared_inline
 def is_delta(ks, light):
     """Whether the light is a delta light (a sun of no angle, a point, a spot): sampled, never hit."""
-    kind = ks.light_kind[light]
+    kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
-        return ks.light_cos[light] >= 1.0
+        return ks.lights.cos[light] >= 1.0
     return kind != LIGHT_ENVIRONMENT and kind != LIGHT_SKY
 
 
 @shared_inline
 def sun_solid_angle(ks, light):
     """Solid angle 2π(1 − cos θ) of a finite sun's cone."""
-    return 2.0 * np.pi * (1.0 - ks.light_cos[light])
+    return 2.0 * np.pi * (1.0 - ks.lights.cos[light])
 
 
 @shared_inline
 def in_sun_cone(ks, light, dx, dy, dz):
     """Whether direction(s) (dx, dy, dz) lie in the sun's cone."""
-    to_sun = ks.light_dir[light]
-    return dx * to_sun[0] + dy * to_sun[1] + dz * to_sun[2] >= ks.light_cos[light]
+    to_sun = ks.lights.dir[light]
+    return dx * to_sun[0] + dy * to_sun[1] + dz * to_sun[2] >= ks.lights.cos[light]
 
 
 @shared_inline
@@ -56,15 +56,15 @@ def infinite_radiance(ks, light, at, dx, dy, dz):
     """Radiance of a non-delta infinite light along direction(s) (dx, dy, dz) at the wavelengths located
     by `at` (0 for other lights): an environment's spectrum; a sky's zenith and horizon spectra blended by
     the direction's elevation sine; a finite sun's spectrum (its irradiance) over π sin²θ in its cone."""
-    kind = ks.light_kind[light]
+    kind = ks.lights.kind[light]
     if kind == LIGHT_ENVIRONMENT:
-        return table_at(ks.light_spd, light, at)
+        return table_at(ks.lights.spd, light, at)
     if kind == LIGHT_SKY:
         t = np.minimum(np.maximum(dz, 0.0), 1.0)
-        return t * table_at(ks.light_spd, light, at) + (1.0 - t) * table_at(ks.light_spd_horizon, light, at)
-    if kind == LIGHT_SUN and ks.light_cos[light] < 1.0:
-        sin2 = 1.0 - ks.light_cos[light] ** 2
-        return table_at(ks.light_spd, light, at) * in_sun_cone(ks, light, dx, dy, dz) / (np.pi * sin2)
+        return t * table_at(ks.lights.spd, light, at) + (1.0 - t) * table_at(ks.lights.spd_horizon, light, at)
+    if kind == LIGHT_SUN and ks.lights.cos[light] < 1.0:
+        sin2 = 1.0 - ks.lights.cos[light] ** 2
+        return table_at(ks.lights.spd, light, at) * in_sun_cone(ks, light, dx, dy, dz) / (np.pi * sin2)
     return 0.0
 
 
@@ -72,10 +72,10 @@ def infinite_radiance(ks, light, at, dx, dy, dz):
 def infinite_pdf(ks, light, dx, dy, dz):
     """Solid-angle pdf of `sample_light` drawing direction(s) (dx, dy, dz) of a non-delta infinite light
     (0 for other lights)."""
-    kind = ks.light_kind[light]
+    kind = ks.lights.kind[light]
     if kind == LIGHT_ENVIRONMENT or kind == LIGHT_SKY:
         return INV_FOUR_PI
-    if kind == LIGHT_SUN and ks.light_cos[light] < 1.0:
+    if kind == LIGHT_SUN and ks.lights.cos[light] < 1.0:
         return in_sun_cone(ks, light, dx, dy, dz) / sun_solid_angle(ks, light)
     return 0.0
 
@@ -86,32 +86,32 @@ def sample_light(ks, light, px, py, pz, u1, u2):
     a finite sun's cone or over the sphere for an environment or a sky. Returns it with its solid-angle pdf
     (1 for a delta light), the distance to the light (inf for suns and the sphere) and the falloff of a
     point or spot light: 1/d², times a spot's cone (smoothed over its blend)."""
-    kind = ks.light_kind[light]
+    kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
-        to_sun = ks.light_dir[light]
-        if ks.light_cos[light] >= 1.0:
+        to_sun = ks.lights.dir[light]
+        if ks.lights.cos[light] >= 1.0:
             return to_sun[0], to_sun[1], to_sun[2], 1.0, np.inf, 1.0
-        cos_theta = 1.0 - u1 * (1.0 - ks.light_cos[light])
+        cos_theta = 1.0 - u1 * (1.0 - ks.lights.cos[light])
         wx, wy, wz = sample_direction((to_sun[0], to_sun[1], to_sun[2]), cos_theta, u2)
         return wx, wy, wz, 1.0 / sun_solid_angle(ks, light), np.inf, 1.0
     if kind == LIGHT_ENVIRONMENT or kind == LIGHT_SKY:
         wz = 1.0 - 2.0 * u1
         r = np.sqrt(np.maximum(0.0, 1.0 - wz * wz))
         return r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2), wz, INV_FOUR_PI, np.inf, 1.0
-    position = ks.light_pos[light]
+    position = ks.lights.pos[light]
     vx, vy, vz = position[0] - px, position[1] - py, position[2] - pz
     distance = np.sqrt(vx * vx + vy * vy + vz * vz)
     wx, wy, wz = vx / distance, vy / distance, vz / distance
     falloff = 1.0 / (distance * distance)
     if kind == LIGHT_SPOT:
-        axis = ks.light_dir[light]
+        axis = ks.lights.dir[light]
         cos_angle = -(wx * axis[0] + wy * axis[1] + wz * axis[2])
-        smooth = ks.light_smooth[light]
+        smooth = ks.lights.smooth[light]
         if smooth > 0.0:
-            t = np.minimum(np.maximum((cos_angle - ks.light_cos[light]) / smooth, 0.0), 1.0)
+            t = np.minimum(np.maximum((cos_angle - ks.lights.cos[light]) / smooth, 0.0), 1.0)
             falloff = falloff * (t * t * (3.0 - 2.0 * t))
         else:
-            falloff = falloff * (cos_angle >= ks.light_cos[light])
+            falloff = falloff * (cos_angle >= ks.lights.cos[light])
     return wx, wy, wz, 1.0, distance, falloff
 
 
@@ -120,5 +120,5 @@ def incident_radiance(ks, light, at, wx, wy, wz, falloff):
     """Radiance arriving along a direction that `sample_light` drew, at the wavelengths located by `at`: a
     delta light's spectrum (irradiance or intensity) times the sample's falloff, else `infinite_radiance`."""
     if is_delta(ks, light):
-        return table_at(ks.light_spd, light, at) * falloff
+        return table_at(ks.lights.spd, light, at) * falloff
     return infinite_radiance(ks, light, at, wx, wy, wz)

@@ -21,28 +21,28 @@ from .lookups import table_at, trilinear
 @shared
 def density(ks, m, x, y, z):
     """Medium m's raw density (before `density_scale`) at world point(s) (x, y, z)."""
-    qx, qy, qz = transform_point(ks.world_to_padded[m], x, y, z)
-    return trilinear(ks.density_data, ks.density_offset[m], ks.density_shape[m], qx - 1.0, qy - 1.0, qz - 1.0)
+    qx, qy, qz = transform_point(ks.density.world_to_padded[m], x, y, z)
+    return trilinear(ks.density.data, ks.density.offset[m], ks.density.shape[m], qx - 1.0, qy - 1.0, qz - 1.0)
 
 
 @shared
 def temperature(ks, m, x, y, z):
     """Medium m's temperature (K) at world point(s) (x, y, z): its grid's value mapped by scale and offset."""
-    qx, qy, qz = transform_point(ks.temperature_world_to_padded[m], x, y, z)
-    raw = trilinear(ks.temperature_data, ks.temperature_offset[m], ks.temperature_shape[m], qx - 1.0, qy - 1.0,
+    qx, qy, qz = transform_point(ks.temperature.world_to_padded[m], x, y, z)
+    raw = trilinear(ks.temperature.data, ks.temperature.offset[m], ks.temperature.shape[m], qx - 1.0, qy - 1.0,
                     qz - 1.0)
-    return raw * ks.temperature_map[m, 0] + ks.temperature_map[m, 1]
+    return raw * ks.temperature.map[m, 0] + ks.temperature.map[m, 1]
 
 
 @shared
 def albedo(ks, m, raw_density, at):
     """Single-scattering albedo of medium m (two density levels or more; one level is its spectrum) at a
     raw density: its levels' spectra interpolated linearly in density, clamped beyond the first and last."""
-    levels = ks.albedo_densities[m, :ks.albedo_count[m]]
+    levels = ks.media.albedo_densities[m, :ks.media.albedo_count[m]]
     upper = np.minimum(np.maximum(np.searchsorted(levels, raw_density, side="left"), 1), levels.shape[0] - 1)
     low, high = levels[upper - 1], levels[upper]
     t = np.minimum(np.maximum((raw_density - low) / (high - low), 0.0), 1.0)
-    table = ks.albedo_table[m]
+    table = ks.media.albedo_table[m]
     return (1.0 - t) * table_at(table, upper - 1, at) + t * table_at(table, upper, at)
 
 
@@ -74,7 +74,7 @@ def thermal_emission(plain_absorption, intensity, lam, kelvin):
 @shared
 def phase_pdf(ks, m, g, cos_theta):
     """Medium m's phase function (= its pdf) at cos θ: Rayleigh, or Henyey–Greenstein with anisotropy g."""
-    if ks.phase_kind[m] == PHASE_RAYLEIGH:
+    if ks.media.phase_kind[m] == PHASE_RAYLEIGH:
         return rayleigh_pdf(cos_theta)
     return hg_pdf(g, cos_theta)
 

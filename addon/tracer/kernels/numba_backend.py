@@ -22,7 +22,7 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   environment, sky and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
 - Thermal emission σ_a·Planck(T) is collected at every tentative collision.
 
-Structure: `render_tile` runs runs of pixels in parallel; `_render_pixels` makes a run's buffers once
+Structure: `render_tile` runs runs of pixels in parallel (`_render_runs`); `_render_pixels` makes a run's buffers once
 (each allocation updates Numba's global counters atomically) and `_render_samples` runs a pixel's samples, each through
 the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `geometry.camera_ray`, then transport
 (`_trace`: `_transport` with `_free_flight`, `_offer_fluorescence`, `_escape`, `_next_event`, `_sample_phase`,
@@ -33,7 +33,8 @@ arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this modu
 and state. Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
 scene's arrays are borrowed
 (`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
-reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call.
+reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call. The
+arrays sit in the scene's nested groups (`layout.KernelScene`), all of which `_borrowed` borrows.
 """
 
 import functools
@@ -56,6 +57,7 @@ from .layout import (
     PHASE_RAYLEIGH,
     SHADOW_ROULETTE_BELOW,
     SHADOW_ROULETTE_STOP,
+    KernelScene,
 )
 from .light_sampling import choose_light, incident_radiance, infinite_pdf, infinite_radiance, is_delta, sample_light
 from .lookups import on_grid, table_at
@@ -90,21 +92,33 @@ SPEC_ROWS = 5
 
 @intrinsic
 def _borrowed(typingctx, scene):
-    """The kernel scene with its arrays borrowed: the same data, without the reference counts that Numba
-    updates whenever an array is passed to a function or sliced. Those updates are atomic operations on
-    counters that every thread shares; the caller keeps the arrays alive for the whole render."""
+    """The kernel scene (or a tuple of buffers) with its arrays borrowed, at any depth of nested tuples: the
+    same data, without the reference counts that Numba updates whenever an array is passed to a function
+    or sliced. Those updates are atomic operations on counters that every thread shares; the caller keeps
+    the arrays alive for the whole render."""
 
     def codegen(context, builder, signature, args):
-        (value,) = args
-        for index, member in enumerate(signature.args[0]):
-            if isinstance(member, types.Array):
-                array = context.make_array(member)(context, builder, builder.extract_value(value, index))
-                array.meminfo = cgutils.get_null_value(array.meminfo.type)
-                array.parent = cgutils.get_null_value(array.parent.type)
-                value = builder.insert_value(value, array._getvalue(), index)
-        return value
+        return _borrow(context, builder, signature.args[0], args[0])
 
     return scene(scene), codegen
+
+
+def _borrow(context, builder, kind, value):
+    """`_borrowed`'s code for a `value` of Numba type `kind`: an array with null reference-count (`meminfo`)
+    and owner (`parent`) pointers, or a tuple with each of its arrays and tuples borrowed. Every array must be:
+    Numba takes the result for a new reference and releases it, so an array still counted would be released
+    once too often (freed while in use)."""
+    if isinstance(kind, types.Array):
+        array = context.make_array(kind)(context, builder, value)
+        array.meminfo = cgutils.get_null_value(array.meminfo.type)
+        array.parent = cgutils.get_null_value(array.parent.type)
+        return array._getvalue()
+    if isinstance(kind, types.BaseTuple):
+        for index, member in enumerate(kind):
+            if isinstance(member, (types.Array, types.BaseTuple)):
+                borrowed = _borrow(context, builder, member, builder.extract_value(value, index))
+                value = builder.insert_value(value, borrowed, index)
+    return value
 
 
 
@@ -134,14 +148,14 @@ def _mean(values, n):
 def _fill_spectral_cache(ks, lams, n, spec):
     """Tabulated spectra of every medium at the path's current wavelengths (looked up once per path
     and after a fluorescent wavelength change, instead of at every collision)."""
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         for i in range(n):
             at = on_grid(lams[i])
-            spec[m, SPEC_EXTINCTION, i] = table_at(ks.extinction, m, at)
-            spec[m, SPEC_EXCITATION, i] = table_at(ks.excitation, m, at)
-            spec[m, SPEC_EMISSION_PDF, i] = table_at(ks.emission_pdf, m, at)
-            spec[m, SPEC_ANISOTROPY, i] = table_at(ks.anisotropy, m, at)
-            spec[m, SPEC_ALBEDO, i] = table_at(ks.albedo_table[m], 0, at)
+            spec[m, SPEC_EXTINCTION, i] = table_at(ks.media.extinction, m, at)
+            spec[m, SPEC_EXCITATION, i] = table_at(ks.fluorescence.excitation, m, at)
+            spec[m, SPEC_EMISSION_PDF, i] = table_at(ks.fluorescence.emission_pdf, m, at)
+            spec[m, SPEC_ANISOTROPY, i] = table_at(ks.media.anisotropy, m, at)
+            spec[m, SPEC_ALBEDO, i] = table_at(ks.media.albedo_table[m], 0, at)
 
 
 @jit(inline="always")
@@ -155,26 +169,26 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
         sigma_s[i] = 0.0
         emission[i] = 0.0
     dye[0] = 0.0
-    for m in range(ks.density_scale.shape[0]):
-        rho = density(ks, m, px, py, pz) * ks.density_scale[m]
-        if rho > 0.0 and ks.fluor_strength[m] > 0.0:
-            dye[0] += rho * ks.excitation_mean[m]
-        kelvin = temperature(ks, m, px, py, pz) if ks.temperature_offset[m] >= 0 and rho > 0 else 0.0
+    for m in range(ks.media.density_scale.shape[0]):
+        rho = density(ks, m, px, py, pz) * ks.media.density_scale[m]
+        if rho > 0.0 and ks.fluorescence.strength[m] > 0.0:
+            dye[0] += rho * ks.fluorescence.excitation_mean[m]
+        kelvin = temperature(ks, m, px, py, pz) if ks.temperature.offset[m] >= 0 and rho > 0 else 0.0
         for i in range(n):
             if rho <= 0.0:
                 medium_s[m, i] = 0.0
                 medium_fl[m, i] = 0.0
                 continue
-            albedo_value = (spec[m, SPEC_ALBEDO, i] if ks.albedo_count[m] == 1
-                            else albedo(ks, m, rho / ks.density_scale[m], on_grid(lams[i])))
+            albedo_value = (spec[m, SPEC_ALBEDO, i] if ks.media.albedo_count[m] == 1
+                            else albedo(ks, m, rho / ks.media.density_scale[m], on_grid(lams[i])))
             scattering, absorption, plain_absorption, medium_fl[m, i] = collision_coefficients(
-                rho, spec[m, SPEC_EXTINCTION, i], albedo_value, spec[m, SPEC_EXCITATION, i], ks.fluor_strength[m],
-                spec[m, SPEC_EMISSION_PDF, i])
+                rho, spec[m, SPEC_EXTINCTION, i], albedo_value, spec[m, SPEC_EXCITATION, i],
+                ks.fluorescence.strength[m], spec[m, SPEC_EMISSION_PDF, i])
             medium_s[m, i] = scattering
             sigma_s[i] += scattering
             sigma_a[i] += absorption
             if kelvin > 0.0:  # Planck's law is costly: skipped where it is 0
-                emission[i] += thermal_emission(plain_absorption, ks.temperature_map[m, 2], lams[i], kelvin)
+                emission[i] += thermal_emission(plain_absorption, ks.temperature.map[m, 2], lams[i], kelvin)
 
 
 # ----------------------------------------------------------------------------- majorant tracking
@@ -194,12 +208,12 @@ T_ENTRY, T_EXIT, T_NEXT, T_DELTA, ORIGIN, DIRECTION, CONTROL, DEPTH, EXCESS, TRA
 def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, tracker):
     """Start every medium's DDA for the ray o + t·d, t in [t_min, t_max]."""
     state_i, state_f = tracker.state_i, tracker.state_f
-    for m in range(ks.density_scale.shape[0]):
-        w2p = ks.world_to_padded[m]
+    for m in range(ks.media.density_scale.shape[0]):
+        w2p = ks.density.world_to_padded[m]
         lox, loy, loz = transform_point(w2p, ox, oy, oz)
         ldx, ldy, ldz = transform_vector(w2p, dx, dy, dz)
-        block = ks.majorant_block[m]
-        shape = ks.majorant_shape[m]
+        block = ks.majorant.block[m]
+        shape = ks.majorant.shape[m]
         t0, t1 = axis_span(lox, ldx, shape[0] * block, t_min, t_max)
         t0, t1 = axis_span(loy, ldy, shape[1] * block, t0, t1)
         t0, t1 = axis_span(loz, ldz, shape[2] * block, t0, t1)
@@ -214,7 +228,7 @@ def _tracker_enter(ks, m, tracker):
     state_i, state_f = tracker.state_i, tracker.state_f
     for axis in range(3):
         cell, step, t_next, t_delta = axis_entry(state_f[m, ORIGIN + axis], state_f[m, DIRECTION + axis],
-                                                 state_f[m, T_ENTRY], ks.majorant_block[m], ks.majorant_shape[m, axis])
+                                                 state_f[m, T_ENTRY], ks.majorant.block[m], ks.majorant.shape[m, axis])
         state_i[m, CELL + axis], state_i[m, STEP + axis] = cell, step
         state_f[m, T_NEXT + axis], state_f[m, T_DELTA + axis] = t_next, t_delta
     state_i[m, PHASE] = INSIDE
@@ -234,11 +248,11 @@ def _tracker_boundary(tracker, m):
 
 @jit(inline="always")
 def _block(ks, tracker, m):
-    """Where medium m's current block is in `majorant_data` (and `minorant_data`)."""
+    """Where medium m's current block is in `majorant.data` (and `majorant.minorant`)."""
     state_i = tracker.state_i
-    shape = ks.majorant_shape[m]
+    shape = ks.majorant.shape[m]
     index = (state_i[m, CELL] * shape[1] + state_i[m, CELL + 1]) * shape[2] + state_i[m, CELL + 2]
-    return ks.majorant_offset[m] + index
+    return ks.majorant.offset[m] + index
 
 
 @jit(inline="always")
@@ -250,15 +264,15 @@ def _tracker_segment(ks, tracker, controls):
     t_end = INF
     sigma_bar = 0.0
     control_rate = 0.0
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         t_end = min(t_end, _tracker_boundary(tracker, m))
         if tracker.state_i[m, PHASE] == INSIDE:
             block = _block(ks, tracker, m)
-            sigma_bar += np.float64(ks.majorant_data[block]) * ks.majorant_coeff[m]
+            sigma_bar += np.float64(ks.majorant.data[block]) * ks.majorant.coeff[m]
             if controls:
-                control = np.float64(ks.minorant_data[block])
-                tracker.state_f[m, CONTROL] = control * ks.density_scale[m]
-                control_rate += control * ks.majorant_coeff[m]
+                control = np.float64(ks.majorant.minorant[block])
+                tracker.state_f[m, CONTROL] = control * ks.media.density_scale[m]
+                control_rate += control * ks.majorant.coeff[m]
         elif controls:
             tracker.state_f[m, CONTROL] = 0.0
     return t_end, sigma_bar, control_rate
@@ -267,7 +281,7 @@ def _tracker_segment(ks, tracker, controls):
 @jit(inline="always")
 def _integrate_controls(ks, tracker, dt):
     """Each medium's control integrated over dt more of the ray (its DEPTH slot)."""
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         tracker.state_f[m, DEPTH] += tracker.state_f[m, CONTROL] * dt
 
 
@@ -275,7 +289,7 @@ def _integrate_controls(ks, tracker, dt):
 def _tracker_advance(ks, tracker, t_end):
     """Move every medium whose boundary is at `t_end` into its next block (or out)."""
     state_i, state_f = tracker.state_i, tracker.state_f
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         if _tracker_boundary(tracker, m) > t_end:
             continue
         if state_i[m, PHASE] == BEFORE:
@@ -292,7 +306,7 @@ def _tracker_advance(ks, tracker, t_end):
         state_i[m, CELL + axis] += state_i[m, STEP + axis]
         state_f[m, T_NEXT + axis] += state_f[m, T_DELTA + axis]
         cell = state_i[m, CELL + axis]
-        if cell < 0 or cell >= ks.majorant_shape[m, axis]:
+        if cell < 0 or cell >= ks.majorant.shape[m, axis]:
             state_i[m, PHASE] = DONE
 
 
@@ -324,7 +338,7 @@ def _mixture_phase(ks, medium_s, spec, n, cos_theta, out):
     for i in range(n):
         total = 0.0
         weighted = 0.0
-        for m in range(ks.density_scale.shape[0]):
+        for m in range(ks.media.density_scale.shape[0]):
             if medium_s[m, i] > 0.0:
                 total += medium_s[m, i]
                 weighted += medium_s[m, i] * phase_pdf(ks, m, spec[m, SPEC_ANISOTROPY, i], cos_theta)
@@ -420,8 +434,8 @@ def _sample_wavelengths(ks, n, path):
     for i in range(n):
         ui = u + i / n
         ui -= math.floor(ui)
-        path.lam_cam[i] = sample_binned(ks.lambda_cdf, ui)
-        path.pdf_cam[i] = pdf_binned(ks.lambda_pdf, path.lam_cam[i])
+        path.lam_cam[i] = sample_binned(ks.wavelengths.cdf, ui)
+        path.pdf_cam[i] = pdf_binned(ks.wavelengths.pdf, path.lam_cam[i])
         path.lams[i] = path.lam_cam[i]
         path.beta[i] = 1.0
         path.r_u[i] = 1.0
@@ -439,9 +453,9 @@ def _path_xyz(ks, n, path):
             continue
         scale = path.radiance[i] / (path.pdf_cam[i] * n)
         at = on_grid(path.lam_cam[i])
-        x += scale * table_at(ks.xyz_weights, 0, at)
-        y += scale * table_at(ks.xyz_weights, 1, at)
-        z += scale * table_at(ks.xyz_weights, 2, at)
+        x += scale * table_at(ks.wavelengths.xyz_weights, 0, at)
+        y += scale * table_at(ks.wavelengths.xyz_weights, 1, at)
+        z += scale * table_at(ks.wavelengths.xyz_weights, 2, at)
     return x, y, z
 
 
@@ -451,7 +465,7 @@ def _path_xyz(ks, n, path):
 def _control_depth(ks, tracker, spec, i):
     """The control's optical depth so far along a shadow ray at wavelength i (residual ratio tracking)."""
     depth = 0.0
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         depth += attenuation(tracker.state_f[m, DEPTH], spec[m, SPEC_EXTINCTION, i], spec[m, SPEC_EXCITATION, i])
     return depth
 
@@ -464,12 +478,12 @@ def _is_grey(ks, n, spec):
     wavelength and cancel out of the spectral MIS, so MIS may give both strategies the controls'
     transmittance in their place (docs/algorithm.md, "Lights and next-event estimation")."""
     area_light = False
-    for light in range(ks.light_kind.shape[0]):
+    for light in range(ks.lights.kind.shape[0]):
         if not is_delta(ks, light):
             area_light = True
     if not area_light:
         return False
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         first = attenuation(1.0, spec[m, SPEC_EXTINCTION, 0], spec[m, SPEC_EXCITATION, 0])
         for i in range(1, n):
             value = attenuation(1.0, spec[m, SPEC_EXTINCTION, i], spec[m, SPEC_EXCITATION, i])
@@ -524,7 +538,7 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
         transmittance[i] = 1.0
         survival[i] = 1.0
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, tracker)
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         state_f[m, CONTROL] = 0.0  # no control: plain ratio tracking
         state_f[m, DEPTH] = 0.0
     t = 0.0
@@ -543,11 +557,11 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
             if t == t_end:
                 break
             px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
-            for m in range(ks.density_scale.shape[0]):
-                state_f[m, EXCESS] = density(ks, m, px, py, pz) * ks.density_scale[m] - state_f[m, CONTROL]
+            for m in range(ks.media.density_scale.shape[0]):
+                state_f[m, EXCESS] = density(ks, m, px, py, pz) * ks.media.density_scale[m] - state_f[m, CONTROL]
             for i in range(n):
                 excess = 0.0
-                for m in range(ks.density_scale.shape[0]):
+                for m in range(ks.media.density_scale.shape[0]):
                     excess += attenuation(state_f[m, EXCESS], path.spec[m, SPEC_EXTINCTION, i],
                                           path.spec[m, SPEC_EXCITATION, i])
                 ratio = null_fraction(rate, excess, 0.0)
@@ -568,7 +582,7 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, grey, n, path, vertex, li
     """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
     transmittance (residual ratio tracking towards delta lights and on `grey` paths), MIS against phase
     sampling (balance heuristic over wavelengths and strategies)."""
-    chosen = choose_light(ks.light_pmf, _next(path.stream))
+    chosen = choose_light(ks.lights.pmf, _next(path.stream))
     u1, u2 = _next(path.stream), _next(path.stream)
     wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, chosen, ox, oy, oz, u1, u2, path.lams, n,
                                                                light.radiance)
@@ -585,7 +599,7 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, grey, n, path, vertex, li
     if not any_light:
         return
     _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, delta or grey, n, path, light, tracker)
-    light_pdf = ks.light_pmf[chosen] * direction_pdf
+    light_pdf = ks.lights.pmf[chosen] * direction_pdf
     for i in range(n):
         light.r_l[i] = path.r_u[i] * light_pdf
         light.r_u[i] = 0.0 if delta else path.r_u[i] * light.phase[i] * light.survival[i]
@@ -605,8 +619,8 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
     reservoir's total so far (one uniform for the three). Then the optical depth grows by the collision
     estimator of the dyes' absorption."""
     tau = fl.tau[0]
-    for m in range(ks.density_scale.shape[0]):
-        if ks.fluor_strength[m] <= 0.0:  # no dye: nothing to offer, and the tracking loop stays lean
+    for m in range(ks.media.density_scale.shape[0]):
+        if ks.fluorescence.strength[m] <= 0.0:  # no dye: nothing to offer, and the tracking loop stays lean
             continue
         source = 0.0
         for i in range(n):
@@ -640,7 +654,7 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, controls, n, path, vertex, t
     beta, r_u, r_l = path.beta, path.r_u, path.r_l
     sigma_a, sigma_s = vertex.sigma_a, vertex.sigma_s
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, tracker)
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         tracker.state_f[m, DEPTH] = 0.0
     fl.tau[0] = 0.0
     t = 0.0
@@ -686,13 +700,13 @@ def _escape(ks, dx, dy, dz, scattered, survival, n, path, light):
     """Radiance of the infinite lights seen along the escaping ray: plain for a camera ray, MIS-weighted
     against light sampling after a scattering vertex, with the path's `survival` along the ray as a shadow
     ray would have given it (`_transmittance`: 1 where `r_l` has the null-event probabilities)."""
-    for chosen in range(ks.light_kind.shape[0]):
+    for chosen in range(ks.lights.kind.shape[0]):
         for i in range(n):
             light.radiance[i] = infinite_radiance(ks, chosen, on_grid(path.lams[i]), dx, dy, dz)
         if not scattered:
             mean_r, weight = _mean(path.r_u, n), 1.0
         else:
-            light_pdf = ks.light_pmf[chosen] * infinite_pdf(ks, chosen, dx, dy, dz)
+            light_pdf = ks.lights.pmf[chosen] * infinite_pdf(ks, chosen, dx, dy, dz)
             for i in range(n):
                 light.r_l[i] = path.r_u[i] * survival + path.r_l[i] * light_pdf
             mean_r, weight = _mean(light.r_l, n), survival
@@ -717,8 +731,8 @@ def _start_fluorescent_branch(ks, path, fl, k):
     that fluoresces (binned, then weighted to the interpolated spectrum), fresh weights, and empty
     reservoirs for its own fluorescent sources."""
     medium = fl.medium[k, 0]
-    path.lams[0] = sample_binned(ks.excitation_cdf[medium], _next(path.stream))
-    path.beta[0] = linear_over_binned(ks.excitation[medium], path.lams[0])
+    path.lams[0] = sample_binned(ks.fluorescence.excitation_cdf[medium], _next(path.stream))
+    path.beta[0] = linear_over_binned(ks.fluorescence.excitation[medium], path.lams[0])
     path.r_u[0] = 1.0
     path.r_l[0] = 1.0
     path.radiance[0] = 0.0
@@ -737,7 +751,7 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
         new_cos = 1.0 - 2.0 * u1
     else:
         medium = _pick_medium(vertex.medium_s, 0, _next(path.stream))
-        if ks.phase_kind[medium] == PHASE_RAYLEIGH:
+        if ks.media.phase_kind[medium] == PHASE_RAYLEIGH:
             new_cos = rayleigh_sample_cos(u1)
         else:
             new_cos = hg_sample_cos(path.spec[medium, SPEC_ANISOTROPY, 0], u1)
@@ -760,7 +774,7 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
 @jit(inline="always")
 def _survives_roulette(ks, depth, n, path):
     """Russian roulette on the MIS-weighted throughput from `rr_depth` on; survivors are reweighted."""
-    if depth < ks.rr_depth:
+    if depth < ks.termination.rr_depth:
         return True
     mean_r = _mean(path.r_u, n)
     largest = 0.0
@@ -786,7 +800,7 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, ligh
     at_vertex = emitted
     while True:
         if at_vertex:
-            if ks.light_kind.shape[0] > 0:
+            if ks.lights.kind.shape[0] > 0:
                 _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, grey, n, path, vertex, light, tracker)
             dx, dy, dz = _sample_phase(ks, dx, dy, dz, emitted, n, path, vertex, light)
             if dx == 0.0 and dy == 0.0 and dz == 0.0:
@@ -805,7 +819,7 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, ligh
             _escape(ks, dx, dy, dz, scattered, survival, n, path, light)
             return
         depth += 1
-        if depth > ks.max_depth:
+        if depth > ks.termination.max_depth:
             return
         ox, oy, oz = qx, qy, qz
         at_vertex = True
@@ -829,7 +843,7 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl):
             else:  # the camera path
                 fl.radiance[i] = path.radiance[i]
                 fl.scale[i] = weight * fl.share[k, i]
-        if weight <= 0.0 or fl.medium[k, 1] > ks.max_depth:
+        if weight <= 0.0 or fl.medium[k, 1] > ks.termination.max_depth:
             break
         depth, emitted, count = fl.medium[k, 1], True, 1
         ox, oy, oz, dx, dy, dz = fl.point[k, 0], fl.point[k, 1], fl.point[k, 2], 0.0, 0.0, 1.0
@@ -843,14 +857,14 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
     """Samples [sample_begin, sample_end) of the tile's pixels [first, last) (row-major), added to `sum_xyz`
     and `sum_sq`. The path's buffers are made once for them all: each allocation updates Numba's global
     allocation counters atomically, which threads contend for."""
-    media = max(ks.density_scale.shape[0], 1)
+    media = max(ks.media.density_scale.shape[0], 1)
     path, vertex = _new_path(media), _new_coefficients(media)
     light, tracker, fl = _new_light_sample(), _new_tracker(media), _new_fluorescent()
     for index in range(first, last):
         row, column = index // tile_width, index % tile_width
         px, py = x0 + column, y0 + row
-        sx, sy, sz, qx, qy, qz = _render_samples(ks, px, py, py * ks.width + px, sample_begin, sample_end, seed, band,
-                                                 path, vertex, light, tracker, fl)
+        sx, sy, sz, qx, qy, qz = _render_samples(ks, px, py, py * ks.camera.width + px, sample_begin, sample_end, seed,
+                                                 band, path, vertex, light, tracker, fl)
         sum_xyz[row, column, 0] += sx
         sum_xyz[row, column, 1] += sy
         sum_xyz[row, column, 2] += sz
@@ -866,7 +880,7 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
     alive, are borrowed (`_borrowed`): the loop below then updates no reference counts."""
     ks, path, vertex, light, tracker, fl = (_borrowed(ks), _borrowed(path), _borrowed(vertex), _borrowed(light),
                                             _borrowed(tracker), _borrowed(fl))
-    n = ks.wavelengths_per_path
+    n = ks.wavelengths.per_path
     path.stream[2] = pixel_key(seed, band, pixel)
     sx, sy, sz, qx, qy, qz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for sample in range(sample_begin, sample_end):
@@ -888,13 +902,25 @@ PIXEL_CHUNKS = 64
 
 
 @cached
-@jit(parallel=True, nogil=True)
+@jit(nogil=True)
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
+    _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.media, ks.fluorescence, ks.lights,
+                 ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
+                 sum_xyz, sum_sq)
+
+
+@jit(parallel=True, nogil=True)
+def _render_runs(camera, density, majorant, temperature, media, fluorescence, lights, wavelengths, termination, x0, y0,
+                 tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+    """`render_tile`'s runs of pixels, in parallel. The kernel scene comes as its groups, and each run puts
+    them together again: Numba's parallel loop hands a tuple to its threads member by member, which fails
+    when a member is a tuple itself."""
     pixels = tile_width * tile_height
     chunks = min(pixels, PIXEL_CHUNKS)
     for chunk in prange(chunks):
+        ks = KernelScene(camera, density, majorant, temperature, media, fluorescence, lights, wavelengths, termination)
         _render_pixels(ks, x0, y0, tile_width, chunk * pixels // chunks, (chunk + 1) * pixels // chunks, sample_begin,
                        sample_end, seed, band, sum_xyz, sum_sq)
 

@@ -101,31 +101,31 @@ def _coefficients(ks, points, lams):
     """Medium coefficients at points (rows) for each path wavelength (columns), summed over media;
     per-medium scattering and fluorescence coefficients (which medium scatters); thermal emission."""
     count, n = lams.shape
-    shape = (count, ks.density_scale.shape[0], n)
+    shape = (count, ks.media.density_scale.shape[0], n)
     out = _Batch(sigma_a=np.zeros((count, n)), sigma_s=np.zeros((count, n)),
                  emission=np.zeros((count, n)), medium_s=np.zeros(shape),
                  medium_fl=np.zeros(shape), dye=np.zeros(count))
     for m in range(shape[1]):
-        rho = media.density(ks, m, *_columns(points)) * ks.density_scale[m]
+        rho = media.density(ks, m, *_columns(points)) * ks.media.density_scale[m]
         rows = np.flatnonzero(rho > 0.0)
         if rows.size == 0:
             continue
-        if ks.fluor_strength[m] > 0.0:
-            out.dye[rows] += rho[rows] * ks.excitation_mean[m]
+        if ks.fluorescence.strength[m] > 0.0:
+            out.dye[rows] += rho[rows] * ks.fluorescence.excitation_mean[m]
         lam, r = lams[rows], rho[rows, None]
         at = on_grid(lam)
-        albedo_value = (table_at(ks.albedo_table[m], 0, at) if ks.albedo_count[m] == 1
-                        else media.albedo(ks, m, r / ks.density_scale[m], at))
+        albedo_value = (table_at(ks.media.albedo_table[m], 0, at) if ks.media.albedo_count[m] == 1
+                        else media.albedo(ks, m, r / ks.media.density_scale[m], at))
         scattering, absorption, plain_absorption, fluorescence = media.collision_coefficients(
-            r, table_at(ks.extinction, m, at), albedo_value, table_at(ks.excitation, m, at), ks.fluor_strength[m],
-            table_at(ks.emission_pdf, m, at))
+            r, table_at(ks.media.extinction, m, at), albedo_value, table_at(ks.fluorescence.excitation, m, at),
+            ks.fluorescence.strength[m], table_at(ks.fluorescence.emission_pdf, m, at))
         out.medium_s[rows, m] = scattering
         out.medium_fl[rows, m] = fluorescence
         out.sigma_s[rows] += scattering
         out.sigma_a[rows] += absorption
-        if ks.temperature_offset[m] >= 0:
+        if ks.temperature.offset[m] >= 0:
             kelvin = media.temperature(ks, m, *_columns(points[rows]))[:, None]
-            out.emission[rows] += media.thermal_emission(plain_absorption, ks.temperature_map[m, 2], lam, kelvin)
+            out.emission[rows] += media.thermal_emission(plain_absorption, ks.temperature.map[m, 2], lam, kelvin)
     return out
 
 
@@ -137,18 +137,18 @@ def _tracker_start(ks, origins, directions, t_max):
     phase (rays, media): 0 before entry, 1 inside, 2 done; t_entry, t_exit: the ray's span in the
     medium's block grid; cell, step, t_next, t_delta (rays, media, 3): the usual DDA state;
     lo, ld: the ray's origin and direction in the medium's padded index space."""
-    count, media = origins.shape[0], ks.density_scale.shape[0]
+    count, media = origins.shape[0], ks.media.density_scale.shape[0]
     tracker = _Batch(phase=np.zeros((count, media), dtype=np.int8),
                      t_entry=np.zeros((count, media)), t_exit=np.zeros((count, media)),
                      cell=np.zeros((count, media, 3), dtype=np.int64), step=np.zeros((count, media, 3), dtype=np.int64),
                      t_next=np.zeros((count, media, 3)), t_delta=np.zeros((count, media, 3)),
                      lo=np.zeros((count, media, 3)), ld=np.zeros((count, media, 3)))
     for m in range(media):
-        lo = _rows(transform_point(ks.world_to_padded[m], *_columns(origins)), count)
-        ld = _rows(transform_vector(ks.world_to_padded[m], *_columns(directions)), count)
+        lo = _rows(transform_point(ks.density.world_to_padded[m], *_columns(origins)), count)
+        ld = _rows(transform_vector(ks.density.world_to_padded[m], *_columns(directions)), count)
         t0, t1 = np.zeros(count), np.broadcast_to(t_max, (count,)).astype(np.float64)
         for axis in range(3):
-            t0, t1 = axis_span(lo[:, axis], ld[:, axis], ks.majorant_shape[m, axis] * ks.majorant_block[m], t0, t1)
+            t0, t1 = axis_span(lo[:, axis], ld[:, axis], ks.majorant.shape[m, axis] * ks.majorant.block[m], t0, t1)
         tracker.phase[:, m] = np.where(t0 >= t1, 2, 0)
         tracker.t_entry[:, m], tracker.t_exit[:, m] = t0, t1
         tracker.lo[:, m], tracker.ld[:, m] = lo, ld
@@ -159,7 +159,7 @@ def _tracker_enter(ks, tracker, rays, media):
     """Put the DDAs of the (ray, medium) pairs `rays[k]`, `media[k]` into their first block."""
     cell, step, t_next, t_delta = axis_entry(tracker.lo[rays, media], tracker.ld[rays, media],
                                              tracker.t_entry[rays, media][:, None],
-                                             ks.majorant_block[media][:, None], ks.majorant_shape[media])
+                                             ks.majorant.block[media][:, None], ks.majorant.shape[media])
     tracker.cell[rays, media], tracker.step[rays, media] = cell, step
     tracker.t_next[rays, media], tracker.t_delta[rays, media] = t_next, t_delta
     tracker.phase[rays, media] = 1
@@ -172,10 +172,10 @@ def _tracker_boundary(tracker):
 
 
 def _blocks(ks, tracker):
-    """(rays, media): where each medium's current block is in `majorant_data` (and `minorant_data`)."""
-    shape = ks.majorant_shape
+    """(rays, media): where each medium's current block is in `majorant.data` (and `majorant.minorant`)."""
+    shape = ks.majorant.shape
     cell = np.minimum(np.maximum(tracker.cell, 0), shape - 1)
-    return ks.majorant_offset + (cell[..., 0] * shape[:, 1] + cell[..., 1]) * shape[:, 2] + cell[..., 2]
+    return ks.majorant.offset + (cell[..., 0] * shape[:, 1] + cell[..., 1]) * shape[:, 2] + cell[..., 2]
 
 
 def _tracker_segment(ks, tracker, controls=None):
@@ -186,16 +186,16 @@ def _tracker_segment(ks, tracker, controls=None):
     t_end = _tracker_boundary(tracker).min(axis=1, initial=INF)
     blocks = _blocks(ks, tracker)
     inside = tracker.phase == 1
-    scaled = ks.majorant_data[blocks].astype(np.float64) * ks.majorant_coeff
+    scaled = ks.majorant.data[blocks].astype(np.float64) * ks.majorant.coeff
     minorant = np.zeros(scaled.shape)
     if controls is not None:
-        minorant = np.where(inside & controls[:, None], ks.minorant_data[blocks].astype(np.float64), 0.0)
-    scaled_minorant = minorant * ks.majorant_coeff
+        minorant = np.where(inside & controls[:, None], ks.majorant.minorant[blocks].astype(np.float64), 0.0)
+    scaled_minorant = minorant * ks.majorant.coeff
     sigma_bar, control_rate = np.zeros(len(tracker)), np.zeros(len(tracker))
-    for m in range(ks.majorant_shape.shape[0]):
+    for m in range(ks.majorant.shape.shape[0]):
         sigma_bar = sigma_bar + np.where(inside[:, m], scaled[:, m], 0.0)
         control_rate = control_rate + scaled_minorant[:, m]
-    return t_end, sigma_bar, minorant * ks.density_scale, control_rate
+    return t_end, sigma_bar, minorant * ks.media.density_scale, control_rate
 
 
 def _tracker_advance(ks, tracker, moving, t_end):
@@ -215,7 +215,7 @@ def _tracker_advance(ks, tracker, moving, t_end):
         tracker.cell[rays, media, axis] += tracker.step[rays, media, axis]
         tracker.t_next[rays, media, axis] += tracker.t_delta[rays, media, axis]
         cell = tracker.cell[rays, media, axis]
-        gone = (cell < 0) | (cell >= ks.majorant_shape[media, axis])
+        gone = (cell < 0) | (cell >= ks.majorant.shape[media, axis])
         tracker.phase[rays[gone], media[gone]] = 2
 
 
@@ -270,7 +270,7 @@ def _mixture_phase(ks, medium_s, lams, cos_theta):
     for m in range(medium_s.shape[1]):
         weight = medium_s[:, m]
         scatters = weight > 0.0
-        pdf = media.phase_pdf(ks, m, table_at(ks.anisotropy, m, at), cos_theta[:, None])
+        pdf = media.phase_pdf(ks, m, table_at(ks.media.anisotropy, m, at), cos_theta[:, None])
         total = total + np.where(scatters, weight, 0.0)
         weighted = weighted + np.where(scatters, weight * pdf, 0.0)
     return np.where(total > 0.0, weighted / total, 0.0)
@@ -300,7 +300,7 @@ def _sample_lights(ks, lights, points, u1, u2, lams):
     count = points.shape[0]
     out = _Batch(w=np.zeros((count, 3)), pdf=np.zeros(count), distance=np.zeros(count),
                  delta=np.zeros(count, dtype=bool), radiance=np.zeros(lams.shape))
-    for light in range(ks.light_kind.shape[0]):
+    for light in range(ks.lights.kind.shape[0]):
         rows = np.flatnonzero(lights == light)
         if rows.size:
             wx, wy, wz, out.pdf[rows], out.distance[rows], falloff = sample_light(
@@ -318,7 +318,7 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
     """New paths through pixels (px, py) (box filter), samples `samples` of the pixels keyed `pixel_keys`:
     wavelengths (hero and stratified companions) and camera rays. Returns the path batch and the camera
     wavelengths with their pdfs."""
-    count, n = samples.shape[0], ks.wavelengths_per_path
+    count, n = samples.shape[0], ks.wavelengths.per_path
     stream = _Batch(key=path_key(pixel_keys, samples), counter=np.zeros(count, dtype=np.uint64), pixel_key=pixel_keys,
                     sample=samples)
     paths = _Batch(id=np.arange(count), stream=stream,
@@ -330,8 +330,8 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
     for i in range(n):
         ui = u + i / n
         ui -= np.floor(ui)
-        lam_cam[:, i] = sample_binned(ks.lambda_cdf, ui)
-        pdf_cam[:, i] = pdf_binned(ks.lambda_pdf, lam_cam[:, i])
+        lam_cam[:, i] = sample_binned(ks.wavelengths.cdf, ui)
+        pdf_cam[:, i] = pdf_binned(ks.wavelengths.pdf, lam_cam[:, i])
     paths.lams[:] = lam_cam
     paths.grey = _is_grey(ks, paths.lams)
     ray = camera_ray(ks, px, py, _draw(paths), _draw(paths))
@@ -347,8 +347,8 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
     beta = paths.beta[rows]
     tau = fl.tau[ids]
     guides = None  # each reservoir's guide at each row's τ, once some medium offers (never without a dye)
-    for m in range(ks.density_scale.shape[0]):
-        if ks.fluor_strength[m] <= 0.0:  # no dye: nothing to offer
+    for m in range(ks.media.density_scale.shape[0]):
+        if ks.fluorescence.strength[m] <= 0.0:  # no dye: nothing to offer
             continue
         source = np.zeros(rows.size)
         for i in range(beta.shape[1]):  # summed in order, as in the Numba kernel
@@ -383,9 +383,9 @@ def _free_flight(ks, paths, radiance, fl):
     `r_l` has the null-event probabilities), for `_escape`."""
     count, n = paths.lams.shape
     vertex = _Batch(event=np.full(count, EVENT_ESCAPE, dtype=np.int8), q=np.zeros((count, 3)),
-                    medium_s=np.zeros((count, ks.density_scale.shape[0], n)), survival=np.ones(count))
+                    medium_s=np.zeros((count, ks.media.density_scale.shape[0], n)), survival=np.ones(count))
     controls = paths.grey & paths.scattered
-    depth = np.zeros((count, ks.density_scale.shape[0]))  # the controls' integral along each ray so far
+    depth = np.zeros((count, ks.media.density_scale.shape[0]))  # the controls' integral along each ray so far
 
     def travel(rays, dt, control):
         depth[rays] += control * dt[:, None]
@@ -434,9 +434,9 @@ def _escape(ks, paths, radiance, survival):
     at = on_grid(paths.lams)
     directions = _columns(paths.d[:, :, None])
     weight = np.where(paths.scattered, survival, 1.0)[:, None]
-    for light in range(ks.light_kind.shape[0]):
+    for light in range(ks.lights.kind.shape[0]):
         light_radiance = infinite_radiance(ks, light, at, *directions)
-        light_pdf = ks.light_pmf[light] * infinite_pdf(ks, light, *directions)
+        light_pdf = ks.lights.pmf[light] * infinite_pdf(ks, light, *directions)
         mean_r = np.where(paths.scattered, _mean(paths.r_u * survival[:, None] + paths.r_l * light_pdf),
                           plain_mean)[:, None]
         radiance[paths.id] += np.where(mean_r > 0.0, paths.beta * light_radiance * weight / mean_r, 0.0)
@@ -446,9 +446,10 @@ def _attenuation_spectra(ks, lams):
     """(extinction, excitation), each (rays, media, wavelengths): every medium's spectra at the rays'
     wavelengths `lams` (rays, wavelengths)."""
     at = on_grid(lams)
-    extinction, excitation = np.zeros((2, lams.shape[0], ks.density_scale.shape[0], lams.shape[1]))
-    for m in range(ks.density_scale.shape[0]):
-        extinction[:, m], excitation[:, m] = table_at(ks.extinction, m, at), table_at(ks.excitation, m, at)
+    extinction, excitation = np.zeros((2, lams.shape[0], ks.media.density_scale.shape[0], lams.shape[1]))
+    for m in range(ks.media.density_scale.shape[0]):
+        extinction[:, m] = table_at(ks.media.extinction, m, at)
+        excitation[:, m] = table_at(ks.fluorescence.excitation, m, at)
     return extinction, excitation
 
 
@@ -464,7 +465,7 @@ def _control_depth(depth, extinction, excitation):
 def _is_grey(ks, lams):
     """The Numba kernel's `_is_grey` for paths of wavelengths `lams`: a light is not a delta light and every
     medium attenuates each path's wavelengths alike (to GREY_SPREAD)."""
-    if all(is_delta(ks, light) for light in range(ks.light_kind.shape[0])):
+    if all(is_delta(ks, light) for light in range(ks.lights.kind.shape[0])):
         return np.zeros(lams.shape[0], dtype=bool)
     value = media.attenuation(1.0, *_attenuation_spectra(ks, lams))
     first = value[:, :, :1]
@@ -483,7 +484,7 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
     transmittance = np.ones(lams.shape)
     survival = np.ones(lams.shape)
     extinction, excitation = _attenuation_spectra(ks, lams)
-    depth = np.zeros((count, ks.density_scale.shape[0]))  # the controls' integral along each ray so far
+    depth = np.zeros((count, ks.media.density_scale.shape[0]))  # the controls' integral along each ray so far
     control_now = np.zeros(depth.shape)
 
     def control_depth(rays):
@@ -510,7 +511,7 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
     def collide(rays, points, rate):
         excess = np.zeros((rays.size, n))
         for m in range(depth.shape[1]):
-            rho = media.density(ks, m, *_columns(points)) * ks.density_scale[m] - control_now[rays, m]
+            rho = media.density(ks, m, *_columns(points)) * ks.media.density_scale[m] - control_now[rays, m]
             excess = excess + media.attenuation(rho[:, None], extinction[rays, m], excitation[rays, m])
         ratio = media.null_fraction(rate[:, None], excess, 0.0)
         transmittance[rays] *= ratio
@@ -528,7 +529,7 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
     transmittance (residual ratio tracking towards delta lights and on grey paths), MIS against phase
     sampling (balance heuristic over wavelengths and strategies)."""
     choice, u1, u2 = _draw(paths), _draw(paths), _draw(paths)
-    lights = choose_light(ks.light_pmf, choice)
+    lights = choose_light(ks.lights.pmf, choice)
     sample = _sample_lights(ks, lights, paths.o, u1, u2, paths.lams)
     cos_theta = (paths.d[:, 0] * sample.w[:, 0] + paths.d[:, 1] * sample.w[:, 1]
                  + paths.d[:, 2] * sample.w[:, 2])
@@ -541,7 +542,7 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
     transmittance, survival = _transmittance(ks, paths, rows, paths.o[rows], sample.w[rows], sample.distance[rows],
                                              paths.lams[rows], sample.delta[rows] | paths.grey[rows])
     r_u, phase_values = paths.r_u[rows], phase_values[rows]
-    light_pdf = (ks.light_pmf[lights[rows]] * sample.pdf[rows])[:, None]
+    light_pdf = (ks.lights.pmf[lights[rows]] * sample.pdf[rows])[:, None]
     r_u_light = np.where(sample.delta[rows, None], 0.0, r_u * phase_values * survival)
     mean_r = _mean(r_u * light_pdf + r_u_light)
     counted = mean_r > 0.0
@@ -556,12 +557,12 @@ def _sample_phase(ks, paths, vertex, isotropic):
     new_cos = 1.0 - 2.0 * u1
     anisotropic = np.flatnonzero(~isotropic)
     medium = _pick_medium(vertex.medium_s[anisotropic, :, 0], _draw(paths, anisotropic))
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         rows = anisotropic[medium == m]
-        if ks.phase_kind[m] == PHASE_RAYLEIGH:
+        if ks.media.phase_kind[m] == PHASE_RAYLEIGH:
             new_cos[rows] = rayleigh_sample_cos(u1[rows])
         else:
-            new_cos[rows] = hg_sample_cos(table_at(ks.anisotropy, m, on_grid(paths.lams[rows, 0])), u1[rows])
+            new_cos[rows] = hg_sample_cos(table_at(ks.media.anisotropy, m, on_grid(paths.lams[rows, 0])), u1[rows])
     direction = _direction(paths.d, new_cos, u2)
     phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
                             _mixture_phase(ks, vertex.medium_s, paths.lams, new_cos))
@@ -577,7 +578,7 @@ def _sample_phase(ks, paths, vertex, isotropic):
 def _roulette(ks, paths):
     """Russian roulette on the MIS-weighted throughput once paths reach `rr_depth`; returns survivors."""
     largest = np.max(paths.beta / _mean(paths.r_u)[:, None], axis=1, initial=0.0)
-    playing = np.flatnonzero((paths.depth >= ks.rr_depth) & (largest < 1.0))
+    playing = np.flatnonzero((paths.depth >= ks.termination.rr_depth) & (largest < 1.0))
     survive = np.maximum(largest[playing], 0.05)
     lost = _draw(paths, playing) >= survive
     paths.beta[playing] /= survive[:, None]
@@ -589,7 +590,7 @@ def _roulette(ks, paths):
 def _scatter(ks, paths, vertex, isotropic, radiance):
     """Next-event estimation and phase sampling at every path's vertex (isotropic where `isotropic`), then
     Russian roulette; returns the paths still alive."""
-    if ks.light_kind.shape[0] > 0:
+    if ks.lights.kind.shape[0] > 0:
         _next_event(ks, paths, vertex, isotropic, radiance)
     keep = _sample_phase(ks, paths, vertex, isotropic)
     paths = paths.take(keep)
@@ -602,7 +603,7 @@ def _bounce(ks, paths, radiance, fl):
     escaped = vertex.event == EVENT_ESCAPE
     if escaped.any():
         _escape(ks, paths.take(escaped), radiance, vertex.survival[escaped])
-    real = (vertex.event == EVENT_SCATTER) & (paths.depth + 1 <= ks.max_depth)
+    real = (vertex.event == EVENT_SCATTER) & (paths.depth + 1 <= ks.termination.max_depth)
     paths, vertex = paths.take(real), vertex.take(real)
     if not len(paths):
         return paths
@@ -635,10 +636,10 @@ def _fluorescent_paths(ks, stream, ids, reservoir, fl):
                    d=np.tile([0.0, 0.0, 1.0], (count, 1)), depth=fl.depth[ids, chosen],
                    scattered=np.ones(count, dtype=bool))
     u = _draw(paths)
-    for m in range(ks.density_scale.shape[0]):
+    for m in range(ks.media.density_scale.shape[0]):
         dyed = fl.medium[ids, chosen] == m
-        paths.lams[dyed, 0] = sample_binned(ks.excitation_cdf[m], u[dyed])
-        paths.beta[dyed, 0] = linear_over_binned(ks.excitation[m], paths.lams[dyed, 0])
+        paths.lams[dyed, 0] = sample_binned(ks.fluorescence.excitation_cdf[m], u[dyed])
+        paths.beta[dyed, 0] = linear_over_binned(ks.fluorescence.excitation[m], paths.lams[dyed, 0])
     paths.grey = _is_grey(ks, paths.lams)
     fl.total[ids] = 0.0
     return paths
@@ -661,25 +662,25 @@ def _trace(ks, px, py, pixel_keys, samples):
     reservoir, weight = np.zeros(count, dtype=np.int64), np.zeros(count)
     _choose_sources(stream, fl, everyone, reservoir, weight)
     scale = weight[:, None] * fl.share[everyone, reservoir]
-    ids = np.flatnonzero((weight > 0.0) & (fl.depth[everyone, reservoir] <= ks.max_depth))
+    ids = np.flatnonzero((weight > 0.0) & (fl.depth[everyone, reservoir] <= ks.termination.max_depth))
     while ids.size:
         paths = _fluorescent_paths(ks, stream, ids, reservoir, fl)
         emitted = np.zeros((count, 1))
-        paths = _scatter(ks, paths, _Batch(medium_s=np.zeros((ids.size, ks.density_scale.shape[0], 1))),
+        paths = _scatter(ks, paths, _Batch(medium_s=np.zeros((ids.size, ks.media.density_scale.shape[0], 1))),
                          np.ones(ids.size, dtype=bool), emitted)
         while len(paths):
             paths = _bounce(ks, paths, emitted, fl)
         radiance[ids] += scale[ids] * emitted[ids]
         _choose_sources(stream, fl, ids, reservoir, weight)
         scale[ids] *= weight[ids, None]
-        ids = ids[(weight[ids] > 0.0) & (fl.depth[ids, reservoir[ids]] <= ks.max_depth)]
+        ids = ids[(weight[ids] > 0.0) & (fl.depth[ids, reservoir[ids]] <= ks.termination.max_depth)]
     xyz = np.zeros((samples.shape[0], 3))
     for i in range(n):
         counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
         scale_i = radiance[:, i] / (pdf_cam[:, i] * n)
         at = on_grid(lam_cam[:, i])
         for c in range(3):
-            xyz[:, c] += np.where(counted, scale_i * table_at(ks.xyz_weights, c, at), 0.0)
+            xyz[:, c] += np.where(counted, scale_i * table_at(ks.wavelengths.xyz_weights, c, at), 0.0)
     return xyz
 
 
@@ -694,7 +695,7 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
         row, column = np.divmod(pixel, tile_width)
         px, py = x0 + column, y0 + row
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
-            pixel_keys = pixel_key(seed, band, py * ks.width + px)
+            pixel_keys = pixel_key(seed, band, py * ks.camera.width + px)
             xyz = _trace(ks, px, py, pixel_keys, (sample_begin + sample).astype(np.uint64))
         np.add.at(sum_xyz, (row, column), xyz)
         np.add.at(sum_sq, (row, column), xyz * xyz)
