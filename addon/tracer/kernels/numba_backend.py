@@ -654,8 +654,9 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, controls, n, path, vertex, t
     beta, r_u, r_l = path.beta, path.r_u, path.r_l
     sigma_a, sigma_s = vertex.sigma_a, vertex.sigma_s
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, tracker)
-    for m in range(ks.media.density_scale.shape[0]):
-        tracker.state_f[m, DEPTH] = 0.0
+    if controls:
+        for m in range(ks.media.density_scale.shape[0]):
+            tracker.state_f[m, DEPTH] = 0.0
     fl.tau[0] = 0.0
     t = 0.0
     while True:

@@ -419,7 +419,8 @@ def _free_flight(ks, paths, radiance, fl):
         return stop
 
     fl.tau[paths.id] = 0.0
-    _track(ks, paths, np.arange(count), paths.o, paths.d, INF, collide, controls=controls, travel=travel)
+    _track(ks, paths, np.arange(count), paths.o, paths.d, INF, collide, controls=controls,
+           travel=travel if controls.any() else None)
     escaped = np.flatnonzero(controls & (vertex.event == EVENT_ESCAPE))
     spectra = _attenuation_spectra(ks, paths.lams[escaped, :1])
     vertex.survival[escaped] = np.exp(-_control_depth(depth[escaped], *spectra)[:, 0])
