@@ -1,22 +1,27 @@
-"""Blender lights and World → tracer lights.
+"""Blender lights → tracer lights.
 
-Brightness is Blender's own, converted so that the same light looks the same in Cycles, in the unit
-the light's Spectral Light settings choose (luminous: the number is luminance Y; radiant: watts over
-the whole spectrum, for UV lamps):
+Brightness is Blender's own, converted so that the same light looks the same in Cycles:
 - Sun: Strength is irradiance in W/m²; our sun's strength is its irradiance, so it is copied.
   Blender's sun shines along the object's −Z; our `direction` points towards the sun: the object's +Z.
 - Point and spot: Power P in W radiates P / (4π) W/sr in every direction (Cycles: a spot is a point
   light masked to its cone, it does not concentrate its power), so our intensity is P / (4π) per sr.
-The spectrum replaces the light's colour. Area lights are not supported (skipped with a warning).
-The World becomes a uniform environment or a sky of radiance `strength` in its unit.
+Both are scaled by 2^Exposure. The colour is Blender's: the light's Color (times the black body of its
+Temperature when that is on, times the Color and Strength of an Emission node in its node tree) as an
+emission spectrum (`tracer.spectra`), in the radiant unit so that the radiance is exactly Cycles' RGB as a
+spectrum. With the light's Spectral Light on, its spectrum replaces the colour instead, in the unit its
+settings choose (luminous: the number is luminance Y; radiant: watts over the whole spectrum, for UV
+lamps). Area lights are not rendered yet (named in the render report).
 """
 
 import math
 
 import numpy as np
 
-from ..tracer.scene import Light
 from ..props.spectrum_values import to_spectrum
+from ..tracer import spectra
+from ..tracer.scene import Light
+from .shader_graph import Blackbody, colour, number, source
+from .world import radiant_light
 
 SUPPORTED = ("SUN", "POINT", "SPOT")
 
@@ -31,31 +36,53 @@ def _axis(matrix_world, column: int) -> np.ndarray:
     return axis / np.linalg.norm(axis)
 
 
-def export_light(obj, matrix) -> Light | None:
+def _spectrum_of(value) -> spectra.Spectrum:
+    """A colour value of `shader_graph` as a reflectance-like factor (a Blackbody: its luminance-1 shape)."""
+    if isinstance(value, Blackbody):
+        return spectra.blackbody_of_luminance_one(max(value.temperature, 1.0))
+    return spectra.scaled_from_rgb(np.maximum(value, 0.0))
+
+
+def light_colour(light, owner: str, notes) -> tuple[spectra.Spectrum, float]:
+    """(emission spectrum, factor) of a Blender light's colour as Cycles combines it: Color × the
+    Temperature's black body × an Emission node's Color and Strength."""
+    rgb = np.maximum(np.array(light.color[:3], dtype=np.float64), 0.0)
+    if light.use_temperature:
+        spectrum = spectra.scaled_from_rgb(rgb) * spectra.blackbody_of_luminance_one(light.temperature)
+    else:
+        spectrum = spectra.emission_from_rgb(rgb)
+    factor = 1.0
+    tree = light.node_tree
+    output = None if tree is None else (tree.get_output_node("CYCLES") or tree.get_output_node("ALL"))
+    found = None if output is None else source(output.inputs["Surface"])
+    if found is not None:
+        node = found[0]
+        if node.bl_idname == "ShaderNodeEmission":
+            spectrum = spectrum * _spectrum_of(colour(node, "Color", owner, notes))
+            factor *= max(float(number(node, "Strength", owner, notes)), 0.0)
+        else:
+            notes.add(f"{owner} ▸ {node.name}: only an Emission node sets a light's colour; its Color is used")
+    return spectrum, factor
+
+
+def export_light(obj, matrix, notes) -> Light | None:
     """The tracer light of an evaluated light object at world `matrix` (its own, or its instance's), or
-    None for unsupported types (area lights)."""
+    None when it gives no light or is not rendered (area lights: named in `notes`)."""
     light = obj.data
     if light.type not in SUPPORTED:
+        notes.leave_out(f"{light.type.lower()} light", obj.name)
         return None
-    spectrum, unit = to_spectrum(light.spectral.spectrum), light.spectral.unit
     if light.type == "SUN":
-        return Light(kind="sun", spectrum=spectrum, strength=light.energy, direction=_axis(matrix, 2),
-                     angle=light.angle, name=obj.name, unit=unit)
-    position = np.array(matrix.translation, dtype=np.float64)
-    strength = point_intensity(light.energy)
-    if light.type == "POINT":
-        return Light(kind="point", spectrum=spectrum, strength=strength, position=position, name=obj.name,
-                     unit=unit)
-    return Light(kind="spot", spectrum=spectrum, strength=strength, position=position,
-                 spot_direction=-_axis(matrix, 2), spot_size=light.spot_size, spot_blend=light.spot_blend,
-                 name=obj.name, unit=unit)
-
-
-def export_world(world) -> Light | None:
-    """The light of the evaluated scene's World, or None when its Spectral World is off."""
-    if world is None or not world.spectral.enabled:
-        return None
-    settings = world.spectral
-    horizon = to_spectrum(settings.horizon) if settings.kind == "sky" else None
-    return Light(kind=settings.kind, spectrum=to_spectrum(settings.spectrum), strength=settings.strength,
-                 horizon_spectrum=horizon, name=world.name, unit=settings.unit)
+        geometry = dict(direction=_axis(matrix, 2), angle=light.angle)
+        strength = light.energy
+    else:
+        geometry = dict(position=np.array(matrix.translation, dtype=np.float64))
+        strength = point_intensity(light.energy)
+        if light.type == "SPOT":
+            geometry.update(spot_direction=-_axis(matrix, 2), spot_size=light.spot_size, spot_blend=light.spot_blend)
+    kind, strength = light.type.lower(), strength * 2.0 ** light.exposure
+    if light.spectral.enabled:
+        return Light(kind=kind, spectrum=to_spectrum(light.spectral.spectrum), strength=strength, name=obj.name,
+                     unit=light.spectral.unit, **geometry)
+    spectrum, factor = light_colour(light, f"light {obj.name!r}", notes)
+    return radiant_light(kind, spectrum, strength * factor, name=obj.name, **geometry)

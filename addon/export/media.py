@@ -1,10 +1,21 @@
-"""Volume material settings + grids → tracer Medium."""
+"""Volume materials → tracer media: from the material's Spectral Volume settings when they are on
+(`export_medium`), else from its volume node tree as Cycles means it (`shader_media`).
+
+Spectral settings are per metre (the scene's Unit Scale applies); node values are per Blender unit,
+as in Cycles.
+"""
+
+import dataclasses
 
 import numpy as np
 
+from ..tracer import spectra
+from ..tracer.wavelengths import GRID
 from ..tracer.errors import SpectralError
-from ..tracer.scene import BlackbodyEmission, Fluorescence, Grid, Medium
+from ..tracer.scene import BlackbodyEmission, Fluorescence, Glow, Grid, Medium
+from ..tracer.spectra import Spectrum
 from ..props.spectrum_values import to_spectrum
+from .volume_shader import Scattering, has_volume_shader, read_volume_shader
 
 
 def materials(obj, depsgraph=None) -> list:
@@ -27,14 +38,11 @@ def spectral_material(obj, depsgraph=None):
     return next((material for material in materials(obj, depsgraph) if material.spectral.enabled), None)
 
 
-def require_material(obj, depsgraph):
-    material = spectral_material(obj, depsgraph)
-    if material is None:
-        names = [material.name for material in materials(obj, depsgraph)]
-        found = f"its materials ({', '.join(names)}) are not spectral" if names else "it has no material"
-        raise SpectralError(f"object {obj.name!r} is a volume but {found}: add a material and enable "
-                            "Spectral Volume in it (Material Properties or the Spectral sidebar tab)")
-    return material
+def volume_material(obj, depsgraph=None):
+    """The first material of `obj` that makes a volume (evaluated in `depsgraph` when given): Spectral
+    Volume enabled, or a volume shader in its node tree; None when it has none."""
+    return next((material for material in materials(obj, depsgraph)
+                 if material.spectral.enabled or has_volume_shader(material)), None)
 
 
 def albedo_table(settings) -> tuple[np.ndarray, np.ndarray]:
@@ -71,3 +79,65 @@ def export_medium(name: str, material, density: Grid, temperature: Grid | None, 
                   extinction=to_spectrum(settings.extinction), albedo_densities=densities, albedo_table=table,
                   anisotropy=to_spectrum(settings.anisotropy), phase=settings.phase, fluorescence=fluorescence,
                   emission=emission)
+
+
+def _albedo(scattering: np.ndarray, extinction: np.ndarray) -> np.ndarray:
+    return np.divide(scattering, extinction, out=np.zeros_like(extinction), where=extinction > 0)
+
+
+def _scattering_media(name: str, parts, fields) -> dict:
+    """One medium per (grid, phase function, anisotropy): the parts' coefficients added."""
+    groups: dict = {}
+    for part in parts:
+        key = (part.grid, part.phase, part.anisotropy)
+        scattering, absorption = groups.get(key, (0.0, 0.0))
+        groups[key] = (scattering + part.scattering, absorption + part.absorption)
+    media = {}
+    for (grid, phase, anisotropy), (scattering, absorption) in groups.items():
+        extinction = scattering + absorption
+        if np.any(extinction > 0):
+            media[(grid, phase, anisotropy)] = Medium(
+                name=name, density=fields.grid(grid), density_scale=1.0, extinction=Spectrum(extinction),
+                albedo_densities=np.zeros(1), albedo_table=_albedo(scattering, extinction)[None, :],
+                anisotropy=spectra.constant(anisotropy), phase=phase)
+    return media
+
+
+def _glows(owner: str, parts, fields, notes) -> dict:
+    """grid → tracer Glow, the parts on one grid added (one black body per grid: the first, others noted)."""
+    glows: dict = {}
+    for part in parts:
+        found = glows.get(part.grid)
+        temperature = fields.grid(part.temperature_grid) if part.temperature_grid else None
+        glow = Glow(spectrum=Spectrum(part.spectrum), blackbody=part.blackbody, tint=Spectrum(part.tint),
+                    temperature=temperature, temperature_scale=part.temperature if temperature else 1.0,
+                    temperature_offset=0.0 if temperature else part.temperature)
+        if found is not None:
+            if part.blackbody > 0 and found.blackbody > 0:
+                notes.add(f"{owner}: only one black body per volume is rendered (the first)")
+            keep = found if found.blackbody > 0 or part.blackbody == 0 else glow
+            glow = Glow(spectrum=Spectrum(found.spectrum.values + part.spectrum), blackbody=keep.blackbody,
+                        tint=keep.tint, temperature=keep.temperature, temperature_scale=keep.temperature_scale,
+                        temperature_offset=keep.temperature_offset)
+        glows[part.grid] = glow
+    return glows
+
+
+def shader_media(name: str, material, fields, notes) -> list[Medium]:
+    """The media of object `name` from `material`'s volume node tree (see `volume_shader`), over the
+    object's `fields` (`volume_fields.VolumeFields`). A glow goes with the scattering medium on its grid, or
+    alone in an emission-only medium."""
+    parts = read_volume_shader(material, fields.has, notes)
+    owner = f"material {material.name!r}"
+    media = _scattering_media(name, [part for part in parts if isinstance(part, Scattering)], fields)
+    glows = _glows(owner, [part for part in parts if not isinstance(part, Scattering)], fields, notes)
+    for grid, glow in glows.items():
+        key = next((key for key in media if key[0] == grid), None)
+        if key is not None:
+            media[key] = dataclasses.replace(media[key], glow=glow)
+        else:
+            media[(grid, "glow", 0.0)] = Medium(
+                name=name, density=fields.grid(grid), density_scale=1.0, extinction=spectra.constant(0.0),
+                albedo_densities=np.zeros(1), albedo_table=np.zeros((1, GRID.size)),
+                anisotropy=spectra.constant(0.0), glow=glow)
+    return list(media.values())

@@ -1,11 +1,14 @@
 """The whole export: an evaluated Blender scene (a depsgraph) → tracer Scene, plus warnings.
 
-Which objects become what:
-- Volume objects: their VDB grids (the object's Density Grid, and the material's temperature grid
-  when it glows) with the first Spectral Volume material; no such material is an error.
-- Meshes with a fluid domain modifier (smoke/fire): the domain's OpenVDB cache, same materials rule.
-- Other meshes whose material has Spectral Volume enabled: voxelised at the object's Voxel Size.
-- Sun, point and spot lights; the World (when its Spectral World is on); the scene camera.
+Which objects become what (the first material with a volume shader or Spectral Volume enabled):
+- Volume objects: their VDB grids; meshes with a fluid domain modifier (smoke/fire): the domain's OpenVDB
+  cache; other meshes with such a material: voxelised at the object's Voxel Size.
+- A material renders from its volume node tree as Cycles means it (`media.shader_media`), or, with its
+  Spectral Volume on, from its spectral settings (the object's Density Grid, and the material's
+  temperature grid when it glows).
+- Sun, point and spot lights (`lights`); the World (`world`); the scene camera.
+- What is not rendered as set (surfaces, area lights, unconvertible node inputs) is named in one warning
+  (`notes`); nothing is skipped silently.
 Materials are per metre, so the scene's Unit Scale scales them (addon.export.media). Motion blur and
 non-square pixels cannot be rendered: each gives one warning.
 Everything is read from the evaluated depsgraph, so animation and drivers are those of its frame (a
@@ -30,10 +33,13 @@ from ..tracer.errors import SpectralError
 from ..tracer.scene import Camera, RenderSettings, Scene
 from .camera import export_camera
 from .fluids import fluid_domain, fluid_grids
-from .lights import export_light, export_world
-from .media import export_medium, require_material, spectral_material
+from .lights import export_light
+from .media import export_medium, materials, shader_media, volume_material
 from .meshes import voxelise
+from .notes import Notes
+from .volume_fields import VolumeFields
 from .volumes import volume_grids
+from .world import export_world
 
 
 @dataclass
@@ -61,28 +67,38 @@ def unsupported_settings(scene) -> list[str]:
     return warnings
 
 
-def _medium(instance, depsgraph, volume_owners, originals: bool):
-    """The medium of one depsgraph instance, or None when it is not a volume. With `originals`, its
-    material's settings are read from the original material (see `export_scene`)."""
+def _object_media(instance, depsgraph, volume_owners, originals: bool, notes: Notes) -> list:
+    """The media of one depsgraph instance ([] when it is not a volume; a mesh without a volume material is
+    a surface, named in `notes`). With `originals`, its material's settings are read from the original
+    material (see `export_scene`)."""
     obj, matrix = instance.object, instance.matrix_world
+    is_volume = obj.type == "VOLUME" or (obj.type == "MESH" and fluid_domain(obj) is not None)
+    if not is_volume and obj.type != "MESH":
+        return []
+    material = volume_material(obj, depsgraph)
+    if material is None:
+        if is_volume:
+            names = [material.name for material in materials(obj, depsgraph)]
+            notes.leave_out("volume without a volume material", obj.name + (f" ({', '.join(names)})" if names else ""),
+                            "volumes without a volume material")
+        elif obj.data.polygons:
+            notes.leave_out("surface object", obj.name)
+        return []
+    if obj.type == "MESH" and not is_volume and obj.original in volume_owners and not obj.data.polygons:
+        return []  # Geometry Nodes turned the mesh into a volume: only that volume renders
+    material = material.original if originals else material
     metres_per_unit = depsgraph.scene_eval.unit_settings.scale_length
-    if obj.type == "VOLUME" or (obj.type == "MESH" and fluid_domain(obj) is not None):
-        material = require_material(obj, depsgraph)
-        material = material.original if originals else material
+    if not material.spectral.enabled:
+        return shader_media(obj.name, material, VolumeFields(obj, depsgraph, matrix), notes)
+    if is_volume:
         names = [obj.original.spectral.density_grid]
         if material.spectral.use_blackbody:
             names.append(material.spectral.temperature_grid)
         read = volume_grids if obj.type == "VOLUME" else fluid_grids
         grids = read(obj, depsgraph, names, matrix)
-        return export_medium(obj.name, material, grids[0], grids[1] if len(grids) > 1 else None, metres_per_unit)
-    if obj.type == "MESH":
-        material = spectral_material(obj, depsgraph)
-        if material is None or (obj.original in volume_owners and not obj.data.polygons):
-            return None  # Geometry Nodes turned the mesh into a volume: only that volume renders
-        material = material.original if originals else material
-        return export_medium(obj.name, material, voxelise(obj, obj.original.spectral.voxel_size, matrix), None,
-                             metres_per_unit)
-    return None
+        return [export_medium(obj.name, material, grids[0], grids[1] if len(grids) > 1 else None, metres_per_unit)]
+    return [export_medium(obj.name, material, voxelise(obj, obj.original.spectral.voxel_size, matrix), None,
+                          metres_per_unit)]
 
 
 def _synchronise(depsgraph) -> None:
@@ -109,7 +125,7 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
         _synchronise(depsgraph)
     scene = depsgraph.scene_eval
     settings_scene = depsgraph.scene.original if originals else scene
-    warnings = unsupported_settings(scene)
+    warnings, notes = unsupported_settings(scene), Notes()
     camera = view or export_camera(scene, scene.camera.evaluated_get(depsgraph) if scene.camera else None)
     media, lights = [], []
     volume_owners = {instance.object.original for instance in depsgraph.object_instances
@@ -117,20 +133,19 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
     for instance in depsgraph.object_instances:  # each instance's object lives only for this iteration
         obj = instance.object
         if obj.type == "LIGHT":
-            light = export_light(obj.original if originals else obj, instance.matrix_world)
-            if light is None:
-                warnings.append(f"light {obj.name!r}: {obj.data.type.lower()} lights are not supported, skipped")
-            else:
+            light = export_light(obj.original if originals else obj, instance.matrix_world, notes)
+            if light is not None:
                 lights.append(light)
         else:
-            medium = _medium(instance, depsgraph, volume_owners, originals)
-            if medium is not None:
-                media.append(medium)
-    world = export_world(settings_scene.world)
+            media.extend(_object_media(instance, depsgraph, volume_owners, originals, notes))
+    world = export_world(settings_scene.world, notes)
     if world is not None:
         lights.append(world)
-    if not lights and not any(medium.emission is not None for medium in media):
-        raise SpectralError("the scene has no lights: add a sun, point or spot light, or turn on the "
-                            "Spectral World in the World properties")
+    warning = notes.warning()
+    if warning is not None:
+        warnings.append(warning)
+    if not lights and not any(medium.emits() for medium in media):
+        raise SpectralError("the scene has no lights: add a sun, point or spot light, give the World a colour, "
+                            "or make a volume glow" + (f" ({warning})" if warning else ""))
     settings = render_settings(settings_scene)
     return Export(Scene(camera=camera, media=tuple(media), lights=tuple(lights), settings=settings), warnings)

@@ -115,6 +115,7 @@ def add_sun(collection, light: Light, spectrum, name: str | None = None):
     """A sun object shining from the tracer light's direction; `spectrum(settings)` sets its spectrum."""
     data = bpy.data.lights.new(name or light.name, "SUN")
     data.energy, data.angle = light.strength, light.angle
+    data.spectral.enabled = True
     spectrum(data.spectral.spectrum)
     obj = link(collection, bpy.data.objects.new(name or light.name, data))
     obj.rotation_euler = _pointing(light.direction)
@@ -128,6 +129,7 @@ def add_point_or_spot(collection, light: Light, name: str | None = None):
     data.energy = light.strength / point_intensity(1.0)
     if light.kind == "spot":
         data.spot_size, data.spot_blend = light.spot_size, light.spot_blend
+    data.spectral.enabled = True
     set_light_spectrum(data.spectral.spectrum, light.spectrum)
     obj = link(collection, bpy.data.objects.new(name or light.name, data))
     obj.location = Vector(light.position)

@@ -22,7 +22,7 @@ from .colorimetry import CMF_NAMES as CMFS
 from .errors import SpectralError
 from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, PHASES, WAVELENGTHS_PER_PATH
 from .phase import HG_G_LIMIT
-from .spectra import Spectrum
+from .spectra import Spectrum, constant
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
@@ -75,6 +75,22 @@ class BlackbodyEmission:
 
 
 @dataclass(frozen=True, eq=False)
+class Glow:
+    """Emission that does not depend on absorption, as Blender's Cycles defines it, per unit length:
+    density(x) · density_scale · [spectrum(λ) + blackbody · tint(λ) · Lbb(λ, T(x))] in W·m⁻²·sr⁻¹·nm⁻¹ per
+    Blender unit, where Lbb is Planck's law scaled to luminance σT⁴/π (Cycles' black body; `glow.py`).
+    T(x) = temperature(x) · temperature_scale + temperature_offset in kelvin, where a missing grid (and a
+    grid outside its box) reads 0: without a grid the temperature is `temperature_offset` everywhere."""
+
+    spectrum: Spectrum | None = None  # radiance per unit length per unit scaled density (None: 0)
+    blackbody: float = 0.0  # weight of the normalised black body (Cycles' Blackbody Intensity × 1e-6)
+    tint: Spectrum = field(default_factory=lambda: constant(1.0))
+    temperature: Grid | None = None
+    temperature_scale: float = 1.0
+    temperature_offset: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
 class Medium:
     """A heterogeneous participating medium.
 
@@ -93,6 +109,11 @@ class Medium:
     phase: str = "hg"  # "hg" | "rayleigh"
     fluorescence: Fluorescence | None = None
     emission: BlackbodyEmission | None = None
+    glow: Glow | None = None
+
+    def emits(self) -> bool:
+        """Whether the medium is a source of light: thermal emission or a glow."""
+        return self.emission is not None or self.glow is not None
 
 
 @dataclass(frozen=True, eq=False)

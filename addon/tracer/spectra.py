@@ -248,12 +248,7 @@ def window(spectrum: Spectrum, lo: float, hi: float) -> Spectrum:
 
 
 def _rgb_triple(rgb) -> tuple[float, float, float]:
-    try:
-        values = np.asarray(rgb, dtype=np.float64)
-    except (TypeError, ValueError):
-        values = None
-    if values is None or values.shape != (3,) or not np.all(np.isfinite(values)):
-        raise SpectralError(f"an RGB colour is three finite numbers, got {rgb!r}")
+    values = np.asarray(_finite_triple(rgb), dtype=np.float64)
     if np.any((values < 0) | (values > 1)):
         raise SpectralError(f"a reflectance RGB colour needs components in [0, 1], got {values.tolist()}")
     return tuple(values.tolist())
@@ -281,6 +276,47 @@ def _from_rgb(rgb: tuple[float, float, float], method: str) -> Spectrum:
         recovered = colour.XYZ_to_sd(colorimetry.rgb_to_xyz(rgb, "rec709"), method=RGB_METHODS[method],
                                      cmfs=observer, illuminant=d65)
     return Spectrum(np.clip(np.interp(GRID, recovered.wavelengths, recovered.values), 0.0, 1.0))
+
+
+def scaled_from_rgb(rgb, method: str = "jakob2019") -> Spectrum:
+    """A smooth spectrum for any non-negative RGB (linear Rec.709), not only a reflectance: the
+    reflectance of `rgb` divided by its largest component, times that component (0 for black). Cycles'
+    colours and coefficients may exceed 1 (Volume Coefficients, emission colours)."""
+    values = np.maximum(np.asarray(_finite_triple(rgb), dtype=np.float64), 0.0)
+    peak = float(values.max())
+    if peak == 0.0:
+        return constant(0.0)
+    return from_rgb(np.minimum(values / peak, 1.0), method) * peak
+
+
+def emission_from_rgb(rgb, method: str = "jakob2019") -> Spectrum:
+    """The spectral radiance of an RGB emission colour (linear Rec.709, components ≥ 0, any size), as
+    Cycles' emitters mean it: the colour's reflectance under D65, with D65 scaled to luminance Y = 1,
+    so that white (1, 1, 1) has Y = 1 and the colour's XYZ is that of `rgb`."""
+    return scaled_from_rgb(rgb, method) * _d65_of_luminance_one()
+
+
+def blackbody_of_luminance_one(temperature: float) -> Spectrum:
+    """Planck's spectrum at `temperature` kelvin scaled to luminance Y = 1 (CIE 1931): the colour of
+    Blender's Blackbody node, which is normalised to luminance 1 too."""
+    shape = blackbody(temperature)
+    return shape * (1.0 / float(colorimetry.spectrum_to_xyz(shape.values)[1]))
+
+
+@lru_cache(maxsize=1)
+def _d65_of_luminance_one() -> Spectrum:
+    d65 = illuminant("D65")
+    return d65 * (1.0 / float(colorimetry.spectrum_to_xyz(d65.values)[1]))
+
+
+def _finite_triple(rgb) -> tuple[float, float, float]:
+    try:
+        values = np.asarray(rgb, dtype=np.float64)
+    except (TypeError, ValueError):
+        values = None
+    if values is None or values.shape != (3,) or not np.all(np.isfinite(values)):
+        raise SpectralError(f"an RGB colour is three finite numbers, got {rgb!r}")
+    return tuple(values.tolist())
 
 
 def _is_number(value) -> bool:

@@ -51,6 +51,8 @@ def add_sun(rotation=(0.0, 0.0, 0.0), strength=3.0):
     sun = link(bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN")))
     sun.rotation_euler = rotation
     sun.data.energy = strength
+    sun.data.spectral.enabled = True  # its spectrum (D65 by default) rather than its Color
+    sun.data.spectral.spectrum.source = "ILLUMINANT"
     return sun
 
 

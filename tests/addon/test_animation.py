@@ -40,6 +40,7 @@ def _animated_scene(tmp_path):
     driver = settings.anisotropy.driver_add("value").driver
     driver.type, driver.expression = "SCRIPTED", "frame / 10"
     scene.world = bpy.data.worlds.new("World")
+    scene.world.spectral.enabled = True
     _key(scene.world.spectral, "strength", (1.0, 2.0))
     scene.frame_start, scene.frame_end = 1, 2
     scene.frame_set(1)

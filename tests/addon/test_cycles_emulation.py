@@ -110,6 +110,7 @@ def test_wavelength_dependent_albedo_agrees_with_the_tracer(registered, tmp_path
     settings.albedo.color = (0.9, 0.45, 0.15)
     scene.world = bpy.data.worlds.new("Sky")
     scene.world.spectral.enabled = True
+    scene.world.spectral.enabled = True
     scene.world.spectral.strength = 0.3
     job = _cross_check(scene, bands=15, tracer_spp=256, cycles_spp=64)
     assert job.cycles_renders == 5
@@ -155,6 +156,7 @@ def test_point_and_spot_lights_agree_with_the_tracer(registered, tmp_path, kind)
     bpy.data.objects.remove(bpy.data.objects["Sun"])
     light = link(bpy.data.objects.new("Lamp", bpy.data.lights.new("Lamp", kind)))
     light.data.energy, light.data.shadow_soft_size = 150.0, 0.0
+    light.data.spectral.enabled = True
     light.data.spectral.spectrum.source, light.data.spectral.spectrum.temperature = "BLACKBODY", 3000.0
     if kind == "POINT":
         light.location = (1.5, -1.5, 1.5)
@@ -173,6 +175,7 @@ def test_sky_world_agrees_with_the_tracer(registered, tmp_path):
     scene, _cloud = blob_scene(tmp_path)
     bpy.data.objects.remove(bpy.data.objects["Sun"])
     scene.world = bpy.data.worlds.new("Sky")
+    scene.world.spectral.enabled = True
     sky = scene.world.spectral
     sky.enabled, sky.kind, sky.strength = True, "sky", 1.0
     sky.spectrum.source, sky.spectrum.temperature = "BLACKBODY", 12000.0
@@ -216,6 +219,7 @@ def _surface_scene(tmp_path):
     area.data.color = (1.0, 0.9, 0.8)
     scene.collection.objects.link(area)
     scene.world = bpy.data.worlds.new("Sky")
+    scene.world.spectral.enabled = True
     scene.world.spectral.enabled = True
     scene.world.spectral.kind = "sky"
     scene.world.spectral.strength = 0.2

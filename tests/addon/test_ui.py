@@ -38,6 +38,7 @@ def _scene_with_everything():
         scene.collection.objects.link(light)
         lights.append(light)
     scene.world = bpy.data.worlds.new("World")
+    scene.world.spectral.enabled = True
     scene.world.spectral.kind = "sky"
     scene.render.engine = ENGINE_ID
     return scene, volume, material, lights

@@ -367,6 +367,7 @@ def test_add_on_setting_edits_reach_the_viewport(registered, tmp_path):
     without re-evaluating its depsgraph (their evaluated copies do not follow property edits)."""
     scene, cloud = basic_scene(tmp_path)
     scene.world = bpy.data.worlds.new("World")
+    scene.world.spectral.enabled = True
     scene.world.spectral.strength = 0.5
     context = _camera_view(scene.camera, 16, 12)
     bpy.context.evaluated_depsgraph_get()

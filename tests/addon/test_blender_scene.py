@@ -1,0 +1,174 @@
+"""The artist's own scene: volume shaders, lights and the World as Blender sets them render as Cycles shows
+them (Cycles in the bpy module as the control, `tests/support/cycles.py`), and what is not rendered is named.
+
+Grey media must agree with Cycles within noise: every 8×8 block within 4 standard deviations of the two
+estimates (the tracer's film variance; Cycles' from two seeds) and the mean colour within CIEDE2000 0.5."""
+
+import math
+
+import numpy as np
+import pytest
+
+from addon.export.scene import export_scene
+from addon.tracer import colorimetry
+from addon.tracer.errors import SpectralError
+from tests.support.cycles import NOISE_BOUND, compare
+
+bpy = pytest.importorskip("bpy")
+
+GREY_DELTA_E = 0.5
+
+
+def _export():
+    return export_scene(bpy.context.evaluated_depsgraph_get())
+
+
+def factory_scene(width=48, height=32):
+    """Blender's factory scene (cube, point light, grey World) small, with the add-on's engine chosen."""
+    bpy.ops.wm.read_factory_settings(use_empty=False)
+    scene = bpy.context.scene
+    scene.render.engine = "SPECTRAL_VOLUME"
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = width, height, 100
+    bpy.data.objects["Light"].data.shadow_soft_size = 0.0  # the tracer's point lights are points
+    return scene
+
+
+def volume_shader(material, kind="ShaderNodeVolumePrincipled", keep_surface=False, **inputs):
+    """Give `material` a volume shader node of `kind` with `inputs` (by socket name), in place of its surface."""
+    tree = material.node_tree
+    node = tree.nodes.new(kind)
+    for name, value in inputs.items():
+        socket = node.inputs[name]
+        socket.default_value = (*value, 1.0) if isinstance(value, tuple) and len(socket.default_value) == 4 else value
+    output = tree.get_output_node("ALL")
+    tree.links.new(node.outputs[0], output.inputs["Volume"])
+    if not keep_surface and output.inputs["Surface"].is_linked:
+        tree.links.remove(output.inputs["Surface"].links[0])
+    return node
+
+
+def _cube_material():
+    return bpy.data.objects["Cube"].active_material
+
+
+@pytest.fixture
+def factory(registered):
+    scene = factory_scene()
+    yield scene
+
+
+def test_factory_scene_with_a_principled_volume_matches_cycles(factory, tmp_path):
+    """The factory scene (point light 1000 W, World grey 0.05) with a grey Principled Volume on its cube."""
+    volume_shader(_cube_material(), Color=(0.8, 0.8, 0.8), Density=1.0)
+    delta_e, z, traced, cycled, warnings = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
+    assert warnings == []
+    assert delta_e < GREY_DELTA_E and z < NOISE_BOUND
+    assert cycled.mean() > 0.02  # a lit image, not a flat or black frame
+
+
+def test_volume_scatter_and_absorption_match_cycles(factory, tmp_path):
+    material = _cube_material()
+    scatter = volume_shader(material, "ShaderNodeVolumeScatter", Color=(0.7, 0.7, 0.7), Density=1.5, Anisotropy=0.5)
+    absorb = material.node_tree.nodes.new("ShaderNodeVolumeAbsorption")
+    absorb.inputs["Color"].default_value = (0.6, 0.6, 0.6, 1.0)
+    absorb.inputs["Density"].default_value = 1.0
+    add = material.node_tree.nodes.new("ShaderNodeAddShader")
+    material.node_tree.links.new(scatter.outputs[0], add.inputs[0])
+    material.node_tree.links.new(absorb.outputs[0], add.inputs[1])
+    material.node_tree.links.new(add.outputs[0], material.node_tree.get_output_node("ALL").inputs["Volume"])
+    delta_e, z, traced, cycled, _warnings = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
+    assert delta_e < GREY_DELTA_E and z < NOISE_BOUND
+
+
+def test_sun_and_world_colour_light_the_volume_as_in_cycles(factory, tmp_path):
+    """A sun of 3 W/m² and a World of colour (0.2, 0.2, 0.2) × 2 light a grey cube; no point light."""
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    factory.collection.objects.link(sun)
+    sun.data.energy, sun.data.angle = 3.0, 0.0
+    sun.rotation_euler = (math.radians(50), 0.0, math.radians(20))
+    background = factory.world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (0.2, 0.2, 0.2, 1.0)
+    background.inputs["Strength"].default_value = 2.0
+    volume_shader(_cube_material(), Color=(0.9, 0.9, 0.9), Density=2.0, Anisotropy=0.3)
+    delta_e, z, traced, cycled, _warnings = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
+    assert delta_e < GREY_DELTA_E and z < NOISE_BOUND
+
+
+def test_spot_light_colour_and_temperature_as_in_cycles(factory, tmp_path):
+    """A spot light's Color and Temperature (Blender multiplies them) and its Exposure."""
+    light = bpy.data.objects["Light"]
+    light.data.type = "SPOT"
+    spot = light.data
+    spot.spot_size, spot.spot_blend, spot.exposure = math.radians(60), 0.2, 1.0
+    spot.color = (1.0, 0.8, 0.6)
+    spot.use_temperature, spot.temperature = True, 4000.0
+    light.rotation_euler = (0.0, 0.0, 0.0)
+    light.location = (0.0, 0.0, 4.0)
+    volume_shader(_cube_material(), Color=(0.8, 0.8, 0.8), Density=1.0)
+    delta_e, z, traced, cycled, _warnings = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
+    assert delta_e < 1.0 and z < NOISE_BOUND  # a coloured light on a grey medium: colour only in the light
+
+
+def test_the_factory_scene_is_no_longer_silent(factory):
+    """Its cube has a surface material: it is named as not rendered, and the World lights the frame."""
+    export = _export()
+    assert export.warnings == ["not rendered: 1 surface object (Cube)"]
+    kinds = sorted(light.kind for light in export.scene.lights)
+    assert kinds == ["environment", "point"] and export.scene.media == ()
+
+
+def test_world_colour_is_blenders_by_default_and_the_spectral_world_starts_from_it(factory):
+    background = factory.world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (0.1, 0.2, 0.6, 1.0)
+    background.inputs["Strength"].default_value = 1.5
+    world = next(light for light in _export().scene.lights if light.kind == "environment")
+    radiance = world.spectrum.values * world.strength / world.spectrum.integral()
+    rgb = colorimetry.xyz_to_rgb(colorimetry.spectrum_to_xyz(radiance))
+    np.testing.assert_allclose(rgb, np.array([0.1, 0.2, 0.6]) * 1.5, rtol=0.01, atol=0.002)
+    factory.world.spectral.enabled = True
+    settings = factory.world.spectral
+    assert settings.spectrum.source == "COLOR" and settings.unit == "luminous"
+    np.testing.assert_allclose(settings.spectrum.color, (1 / 6, 2 / 6, 1.0), rtol=1e-5)
+    spectral = next(light for light in _export().scene.lights if light.kind == "environment")
+    assert spectral.strength == pytest.approx(1.5 * (0.2126 * 0.1 + 0.7152 * 0.2 + 0.0722 * 0.6), rel=1e-5)
+
+
+def test_what_is_not_rendered_is_named_in_one_warning(factory):
+    bpy.ops.mesh.primitive_plane_add(size=4.0, location=(0.0, 0.0, -1.0))
+    area = bpy.data.objects.new("Area", bpy.data.lights.new("Area", "AREA"))
+    factory.collection.objects.link(area)
+    fog = volume_shader(_cube_material(), "ShaderNodeVolumeScatter", Color=(0.8, 0.8, 0.8), Density=1.0)
+    fog.phase = "MIE"
+    texture = _cube_material().node_tree.nodes.new("ShaderNodeTexNoise")
+    _cube_material().node_tree.links.new(texture.outputs["Fac"], fog.inputs["Density"])
+    warnings = _export().warnings
+    assert len(warnings) == 1
+    warning = warnings[0]
+    assert warning.startswith("not rendered: 1 surface object (Plane); 1 area light (Area); ")
+    assert "material 'Material' ▸ Volume Scatter: phase Mie rendered as Henyey–Greenstein" in warning
+    assert "material 'Material' ▸ Volume Scatter ▸ Density is driven by 'Noise Texture'" in warning
+
+
+def test_spectral_switch_chooses_the_spectral_settings_over_the_nodes(factory):
+    material = _cube_material()
+    volume_shader(material, Color=(0.8, 0.1, 0.1), Density=2.0)
+    from_nodes = _export().scene.media[0]
+    assert from_nodes.extinction.values.max() == pytest.approx(2.0)
+    assert from_nodes.albedo_table[0, 650 - 250] > 0.6 > 0.2 > from_nodes.albedo_table[0, 530 - 250]
+    material.spectral.enabled = True
+    material.spectral.albedo.value, material.spectral.density_scale = 0.5, 3.0
+    spectral = _export().scene.media[0]
+    np.testing.assert_allclose(spectral.albedo_table, 0.5)
+    assert spectral.density_scale == pytest.approx(3.0)
+
+
+def test_a_volume_without_a_volume_shader_is_named_not_an_error(factory):
+    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    with pytest.raises(SpectralError, match=r"the scene has no lights.*1 surface object \(Cube\)"):
+        _export()

@@ -1,0 +1,81 @@
+"""Cycles as the control for the exporter: the same Blender scene rendered by Cycles (CPU, in the bpy
+module) and by the tracer through the add-on's export, compared on block means.
+
+Cycles renders with its volume bounces raised to the tracer's depth (its default, 0, is single
+scattering), denoising off, and its linear Rec.709 read from an EXR; the tracer's film gives linear Rec.709
+and per-pixel variances. Block differences are judged against both estimates' noise: Cycles' from two
+renders with different seeds."""
+
+import math
+from pathlib import Path
+
+import bpy
+import numpy as np
+
+from addon.export.scene import export_scene
+from addon.tracer import colorimetry, image_io
+from addon.tracer.render import render
+
+BLOCK = 8
+NOISE_BOUND = 4.0  # standard deviations per block
+
+
+def cycles_rgb(scene, folder: Path, spp: int, seed: int, bounces: int = 64) -> np.ndarray:
+    """Cycles' linear Rec.709 image of `scene` (height, width, 3), top row first."""
+    engine = scene.render.engine
+    scene.render.engine = "CYCLES"
+    cycles = scene.cycles
+    cycles.device, cycles.samples, cycles.seed, cycles.use_denoising = "CPU", spp, seed, False
+    cycles.use_adaptive_sampling = False
+    cycles.max_bounces = cycles.volume_bounces = cycles.transparent_max_bounces = bounces
+    cycles.diffuse_bounces = cycles.glossy_bounces = cycles.transmission_bounces = bounces
+    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
+    settings = scene.render.image_settings
+    settings.file_format, settings.color_depth, settings.color_mode = "OPEN_EXR", "32", "RGB"
+    scene.render.filepath = str(folder / f"cycles_{seed}.exr")
+    try:
+        bpy.ops.render.render(write_still=True, scene=scene.name)
+    finally:
+        scene.render.engine = engine
+    channels = image_io.read_exr(scene.render.filepath)
+    names = sorted(name for name in channels if name.split(".")[-1] in "RGB" and len(name.split(".")[-1]) == 1)
+    by_letter = {name.split(".")[-1]: channels[name] for name in names}
+    return np.stack([by_letter["R"], by_letter["G"], by_letter["B"]], axis=-1).astype(np.float64)
+
+
+def blocks(image: np.ndarray) -> np.ndarray:
+    h, w = image.shape[0] // BLOCK, image.shape[1] // BLOCK
+    return image[:h * BLOCK, :w * BLOCK].reshape(h, BLOCK, w, BLOCK, -1).mean(axis=(1, 3))
+
+
+def tracer_rgb(scene, spp: int):
+    """(linear Rec.709 image, per-pixel variance of each channel's mean, export warnings) of the tracer."""
+    export = export_scene(bpy.context.evaluated_depsgraph_get())
+    film = render(export.scene, spp=spp).film
+    to_rgb = colorimetry.xyz_to_rgb_matrix()
+    variance = film.variance @ (to_rgb**2).T  # channels treated as independent: a bound, not an estimate
+    return film.xyz @ to_rgb.T, variance, export.warnings
+
+
+def compare(scene, folder: Path, tracer_spp: int, cycles_spp: int, allowance: float = 0.0):
+    """Render both; returns (ΔE00 of the mean colours, the largest block difference in standard
+    deviations, the tracer's and Cycles' mean RGB, export warnings). `allowance`: a relative difference of
+    each block admitted beside the noise (the spectral-versus-RGB difference of coloured media)."""
+    traced, variance, warnings = tracer_rgb(scene, tracer_spp)
+    halves = [cycles_rgb(scene, folder, cycles_spp, seed) for seed in (1, 2)]
+    cycled = (halves[0] + halves[1]) / 2
+    cycles_variance = blocks((halves[0] - halves[1]) ** 2 / 4)  # of the mean of two, per block of pixels
+    sigma = np.sqrt(blocks(variance) / BLOCK**2 + cycles_variance / BLOCK**2 + (allowance * blocks(traced)) ** 2)
+    white_y = max(float(np.percentile(traced @ colorimetry.rgb_to_xyz_matrix()[1], 99)), 1e-6)
+    z = np.abs(blocks(cycled) - blocks(traced)) / np.maximum(sigma, 1e-4 * white_y)
+    to_xyz = colorimetry.rgb_to_xyz_matrix()
+    white = colorimetry.rgb_to_xyz([1.0, 1.0, 1.0]) * white_y
+    delta_e = float(colorimetry.delta_e_2000(to_xyz @ cycled.mean(axis=(0, 1)), to_xyz @ traced.mean(axis=(0, 1)),
+                                             white))
+    return delta_e, float(z.max()), traced.mean(axis=(0, 1)), cycled.mean(axis=(0, 1)), warnings
+
+
+def look_at(obj, target=(0.0, 0.0, 0.0)) -> None:
+    direction = np.subtract(target, tuple(obj.location))
+    obj.rotation_euler = (math.atan2(math.hypot(direction[0], direction[1]), -direction[2]), 0.0,
+                          math.atan2(direction[1], direction[0]) + math.pi / 2)
