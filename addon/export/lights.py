@@ -20,7 +20,7 @@ import numpy as np
 from ..props.spectrum_values import to_spectrum
 from ..tracer import spectra
 from ..tracer.scene import Light
-from .shader_graph import Blackbody, colour, number, source
+from ..nodes.graph import Blackbody, colour, number, output_source
 from .world import radiant_light
 
 SUPPORTED = ("SUN", "POINT", "SPOT")
@@ -37,7 +37,7 @@ def _axis(matrix_world, column: int) -> np.ndarray:
 
 
 def _spectrum_of(value) -> spectra.Spectrum:
-    """A colour value of `shader_graph` as a reflectance-like factor (a Blackbody: its luminance-1 shape)."""
+    """A colour value of `nodes.graph` as a reflectance-like factor (a Blackbody: its luminance-1 shape)."""
     if isinstance(value, Blackbody):
         return spectra.blackbody_of_luminance_one(max(value.temperature, 1.0))
     return spectra.scaled_from_rgb(np.maximum(value, 0.0))
@@ -52,9 +52,7 @@ def light_colour(light, owner: str, notes) -> tuple[spectra.Spectrum, float]:
     else:
         spectrum = spectra.emission_from_rgb(rgb)
     factor = 1.0
-    tree = light.node_tree
-    output = None if tree is None else (tree.get_output_node("CYCLES") or tree.get_output_node("ALL"))
-    found = None if output is None else source(output.inputs["Surface"])
+    found = output_source(light.node_tree, "Surface")
     if found is not None:
         node = found[0]
         if node.bl_idname == "ShaderNodeEmission":

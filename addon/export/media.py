@@ -15,7 +15,7 @@ from ..tracer.errors import SpectralError
 from ..tracer.scene import BlackbodyEmission, Fluorescence, Glow, Grid, Medium
 from ..tracer.spectra import Spectrum
 from ..props.spectrum_values import to_spectrum
-from .volume_shader import Scattering, has_volume_shader, read_volume_shader
+from ..nodes.volume import Scattering, has_volume_shader, read_volume_shader
 
 
 def materials(obj, depsgraph=None) -> list:
@@ -124,7 +124,7 @@ def _glows(owner: str, parts, fields, notes) -> dict:
 
 
 def shader_media(name: str, material, fields, notes) -> list[Medium]:
-    """The media of object `name` from `material`'s volume node tree (see `volume_shader`), over the
+    """The media of object `name` from `material`'s volume node tree (see `nodes.volume`), over the
     object's `fields` (`volume_fields.VolumeFields`). A glow goes with the scattering medium on its grid, or
     alone in an emission-only medium."""
     parts = read_volume_shader(material, fields.has, notes)

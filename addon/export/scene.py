@@ -36,7 +36,7 @@ from .fluids import fluid_domain, fluid_grids
 from .lights import export_light
 from .media import export_medium, materials, shader_media, volume_material
 from .meshes import voxelise
-from .notes import Notes
+from ..nodes.notes import Notes
 from .volume_fields import VolumeFields
 from .volumes import volume_grids
 from .world import export_world

@@ -13,7 +13,7 @@ import numpy as np
 from ..props.spectrum_values import to_spectrum
 from ..tracer import spectra
 from ..tracer.scene import Light
-from .shader_graph import Blackbody, colour, number, source
+from ..nodes.graph import Blackbody, colour, number, output_source, source
 
 BACKGROUNDS = ("ShaderNodeBackground", "ShaderNodeEmission")
 
@@ -76,9 +76,7 @@ def export_world(world, notes) -> Light | None:
     if world.spectral.enabled:
         return _spectral_world(world)
     owner = f"World {world.name!r}"
-    tree = world.node_tree
-    output = None if tree is None else (tree.get_output_node("CYCLES") or tree.get_output_node("ALL"))
-    found = None if output is None else source(output.inputs["Surface"])
+    found = output_source(world.node_tree, "Surface")
     if found is None:
         return None
     node = found[0]

@@ -139,10 +139,15 @@ def add_point_or_spot(collection, light: Light, name: str | None = None):
 
 
 def new_world(name: str, light: Light | None = None, spectrum=None):
-    """A World: off, or the environment or sky `light` with `spectrum(settings)` (a sky's horizon from
-    the light)."""
+    """A World: dark, or the Spectral World of the environment or sky `light` with `spectrum(settings)` (a
+    sky's horizon from the light)."""
     world = bpy.data.worlds.new(name)
     world.spectral.enabled = light is not None
+    if light is None:  # Blender's own World (grey by default) would light the scene
+        world.color = (0.0, 0.0, 0.0)
+        for node in world.node_tree.nodes if world.node_tree else ():
+            if "Strength" in node.inputs:
+                node.inputs["Strength"].default_value = 0.0
     if light is not None:
         world.spectral.kind, world.spectral.strength = light.kind, light.strength
         spectrum(world.spectral.spectrum)

@@ -11,6 +11,7 @@ spectrum from the current colour (`starting_colour`), so the image does not jump
 
 import bpy
 
+from ..nodes.graph import output_source
 from .spectrum import SpectralLightSpectrum
 
 # The tracer's light units (tracer.scene.LIGHT_UNITS), for lights and the World.
@@ -38,10 +39,8 @@ def _start_world_from_colour(settings, _context) -> None:
 
 def world_colour(world) -> tuple[tuple, float]:
     """(RGB, strength) of a World's Background node (its socket values), else its viewport colour."""
-    tree = world.node_tree
-    output = None if tree is None else (tree.get_output_node("CYCLES") or tree.get_output_node("ALL"))
-    link = output.inputs["Surface"].links[0] if output is not None and output.inputs["Surface"].is_linked else None
-    node = None if link is None else link.from_node
+    found = output_source(world.node_tree, "Surface")
+    node = None if found is None else found[0]
     if node is not None and "Color" in node.inputs and "Strength" in node.inputs:
         return tuple(node.inputs["Color"].default_value[:3]), float(node.inputs["Strength"].default_value)
     return tuple(world.color), 1.0

@@ -1,11 +1,20 @@
-"""Volume material settings: what a material means to the spectral tracer.
+"""Volume material settings: what a material means to the spectral tracer when its Spectral Volume is on.
 
 Stored on the Material (`material.spectral`), used by every object the material is on: Volume
 objects, fluid domains and meshes (voxelised). Mirrors the tracer's `Medium`: extinction, an albedo
-table over density levels, anisotropy, phase function, fluorescence and blackbody emission.
+table over density levels, anisotropy, phase function, fluorescence and blackbody emission. Off (the
+default), the material renders from its volume nodes; turning it on starts the extinction, albedo and
+anisotropy from those nodes (`start_from_nodes`), so the image does not jump. Emission does not carry
+over: a spectral material's glow is thermal (by its absorption and a temperature grid).
 """
 
 import bpy
+import numpy as np
+
+from . import curves
+from ..nodes.notes import Notes
+from ..nodes.volume import Scattering, read_volume_shader
+from ..tracer.wavelengths import GRID
 
 from .spectrum import (SpectralAlbedoSpectrum, SpectralAnisotropySpectrum, SpectralEmissionSpectrum,
                        SpectralExcitationSpectrum, SpectralExtinctionSpectrum)
@@ -20,9 +29,52 @@ class SpectralAlbedoLevel(bpy.types.PropertyGroup):
                                         description="Albedo spectrum at this density")
 
 
+CURVE_STEP = 10  # nm between the points of a curve started from the nodes
+
+
+def _set_spectrum(settings, values: np.ndarray) -> None:
+    """A CONSTANT spectrum where `values` is flat, else a curve through them every CURVE_STEP nm."""
+    if np.ptp(values) <= 1e-6 * max(float(np.abs(values).max()), 1e-12):
+        settings.source, settings.value = "CONSTANT", float(values.mean())
+        return
+    settings.source = "CURVE"
+    wavelengths = GRID[::CURVE_STEP]
+    curves.set_points(curves.ensure(settings.curve, settings.Y_RANGE), wavelengths,
+                      np.clip(values[::CURVE_STEP], *settings.Y_RANGE))
+
+
+def start_from_nodes(settings, context) -> None:
+    """Set a material's spectral extinction, albedo, anisotropy and phase from its volume nodes' scattering
+    and absorption (Cycles' meaning, per Blender unit; the settings are per metre of the scene's Unit Scale)."""
+    parts = [part for part in read_volume_shader(settings.id_data, lambda _name: True, Notes())
+             if isinstance(part, Scattering)]
+    if not parts:
+        return
+    scattering = sum(part.scattering for part in parts)
+    extinction = scattering + sum(part.absorption for part in parts)
+    peak = float(extinction.max())
+    if not peak > 0:
+        return
+    metres_per_unit = context.scene.unit_settings.scale_length if getattr(context, "scene", None) else 1.0
+    settings.density_scale = peak / metres_per_unit
+    _set_spectrum(settings.extinction, extinction / peak)
+    _set_spectrum(settings.albedo, np.divide(scattering, extinction, out=np.zeros_like(extinction),
+                                             where=extinction > 0))
+    weights = np.array([part.scattering.sum() for part in parts])
+    anisotropy = float(np.dot(weights, [part.anisotropy for part in parts]) / max(weights.sum(), 1e-12))
+    settings.anisotropy.source, settings.anisotropy.value = "CONSTANT", anisotropy
+    settings.phase = "rayleigh" if all(part.phase == "rayleigh" for part in parts) else "hg"
+
+
+def _enabled_changed(settings, context) -> None:
+    if settings.enabled:
+        start_from_nodes(settings, context)
+
+
 class SpectralMaterialSettings(bpy.types.PropertyGroup):
-    enabled: bpy.props.BoolProperty(name="Spectral Volume", description="Render this material's volume spectrally",
-                                    default=False)
+    enabled: bpy.props.BoolProperty(name="Spectral Volume", default=False, update=_enabled_changed,
+                                    description="Render this material's volume from the spectral settings "
+                                                "instead of its volume nodes (starts from the nodes' values)")
     density_scale: bpy.props.FloatProperty(name="Density Scale", description="Multiplies the density grid",
                                            default=1.0, min=1e-6, soft_max=100.0)
     extinction: bpy.props.PointerProperty(type=SpectralExtinctionSpectrum, name="Extinction",

@@ -10,15 +10,15 @@ SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT")
 
 
 def draw_light(layout, light) -> None:
-    """Brightness and its unit, size (the sun's Angle softens its shadows; the tracer's point and spot
-    lights are points, so their Radius is greyed out and says why), then the spectrum."""
+    """Brightness, size (the sun's Angle softens its shadows; the tracer's point and spot lights are
+    points, so their Radius is greyed out and says why), then the colour: Blender's Color and
+    Temperature, or with Spectral Light on, the spectrum and its unit."""
     if light.type not in SUPPORTED_LIGHTS:
-        layout.label(text=iface_("{} lights are not rendered spectrally (sun, point, spot are)").format(
+        layout.label(text=iface_("{} lights are not rendered yet (sun, point, spot are)").format(
             iface_(light.bl_rna.properties["type"].enum_items[light.type].name)), translate=False, icon="ERROR")
         return
     column = layout.column()
     column.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
-    column.prop(light.spectral, "unit")
     if light.type == "SUN":
         column.prop(light, "angle")
     else:
@@ -26,6 +26,16 @@ def draw_light(layout, light) -> None:
         radius.active = False
         radius.prop(light, "shadow_soft_size", text="Radius")
         radius.label(text="The tracer renders a point: only the Cycles emulation uses the Radius", icon="INFO")
+    column.prop(light.spectral, "enabled")
+    if not light.spectral.enabled:
+        column.prop(light, "color")
+        row = column.row(heading="Temperature")
+        row.prop(light, "use_temperature", text="")
+        sub = row.row()
+        sub.active = light.use_temperature
+        sub.prop(light, "temperature", text="")
+        return
+    column.prop(light.spectral, "unit")
     draw_spectrum(layout, light.spectral.spectrum, "Spectrum", presets=True)
 
 

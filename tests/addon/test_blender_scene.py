@@ -161,7 +161,8 @@ def test_spectral_switch_chooses_the_spectral_settings_over_the_nodes(factory):
     assert from_nodes.extinction.values.max() == pytest.approx(2.0)
     assert from_nodes.albedo_table[0, 650 - 250] > 0.6 > 0.2 > from_nodes.albedo_table[0, 530 - 250]
     material.spectral.enabled = True
-    material.spectral.albedo.value, material.spectral.density_scale = 0.5, 3.0
+    material.spectral.albedo.source, material.spectral.albedo.value = "CONSTANT", 0.5
+    material.spectral.density_scale = 3.0
     spectral = _export().scene.media[0]
     np.testing.assert_allclose(spectral.albedo_table, 0.5)
     assert spectral.density_scale == pytest.approx(3.0)
@@ -172,3 +173,17 @@ def test_a_volume_without_a_volume_shader_is_named_not_an_error(factory):
     bpy.data.objects.remove(bpy.data.objects["Light"])
     with pytest.raises(SpectralError, match=r"the scene has no lights.*1 surface object \(Cube\)"):
         _export()
+
+
+def test_turning_spectral_volume_on_starts_from_the_node_values(factory):
+    """The exported medium barely changes: the same σ_t and g, the albedo through a curve (10 nm points)."""
+    material = _cube_material()
+    volume_shader(material, Color=(0.8, 0.1, 0.1), Density=2.0, Anisotropy=0.6, **{"Absorption Color": (0.2, 0.2, 0.2)})
+    before = _export().scene.media[0]
+    material.spectral.enabled = True
+    after = _export().scene.media[0]
+    visible = slice(380 - 250, 780 - 250)
+    np.testing.assert_allclose((after.extinction.values * after.density_scale)[visible],
+                               (before.extinction.values * before.density_scale)[visible], rtol=0.02)
+    np.testing.assert_allclose(after.albedo_table[0][visible], before.albedo_table[0][visible], atol=0.02)
+    assert after.anisotropy.values[0] == pytest.approx(0.6, abs=1e-6) and after.phase == "hg"

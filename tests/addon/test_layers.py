@@ -41,6 +41,7 @@ def within(name: str, package: str) -> bool:
 
 @pytest.mark.parametrize("package, forbidden", [
     ("tracer", ("bpy", "addon.props", "addon.export", "addon.ui", "addon.operators", "addon.engine", "addon.importer")),
+    ("nodes", ("addon.props", "addon.export", "addon.ui", "addon.operators", "addon.engine", "addon.importer")),
     ("props", ("addon.export", "addon.ui", "addon.operators", "addon.engine", "addon.importer")),
     ("export", ("addon.ui", "addon.operators", "addon.engine", "addon.importer")),
 ])

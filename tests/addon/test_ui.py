@@ -35,6 +35,7 @@ def _scene_with_everything():
     lights = []
     for kind in ("SUN", "POINT", "SPOT", "AREA"):
         light = bpy.data.objects.new(kind.title(), bpy.data.lights.new(kind.title(), kind))
+        light.data.spectral.enabled = True
         scene.collection.objects.link(light)
         lights.append(light)
     scene.world = bpy.data.worlds.new("World")
@@ -106,7 +107,7 @@ def test_light_spectrum_shows_presets_and_swatch(registered):
     assert any(name == "prop" and args[1] == "preview" for name, args, _k in layout.calls)
     area = lights[3]
     layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, area))
-    assert any("not rendered spectrally" in text for text in layout.texts())
+    assert any("not rendered yet" in text for text in layout.texts())
 
 
 def test_light_size_is_drawn_sun_angle_and_greyed_radius(registered):
@@ -118,6 +119,18 @@ def test_light_size_is_drawn_sun_angle_and_greyed_radius(registered):
         layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, obj))
         assert layout.setting_before(layout.index("prop", light, "shadow_soft_size"), "active") is False
         assert any("only the Cycles emulation uses the Radius" in text for text in layout.texts())
+
+
+def test_light_shows_blenders_colour_until_spectral_light_is_on(registered):
+    scene, _volume, _material, lights = _scene_with_everything()
+    point = lights[1].data
+    point.spectral.enabled = False
+    layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, lights[1]))
+    assert layout.index("prop", point, "color") is not None and layout.index("prop", point, "temperature") is not None
+    assert not any(name == "prop" and args[1] == "preview" for name, args, _k in layout.calls)  # no spectrum
+    point.spectral.enabled = True
+    layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, lights[1]))
+    assert any(name == "prop" and args[1] == "preview" for name, args, _k in layout.calls)
 
 
 def test_ui_list_draws(registered):

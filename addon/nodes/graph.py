@@ -51,6 +51,15 @@ def source(socket):
     return None
 
 
+def output_source(tree, socket_name: str):
+    """(node, output socket) feeding input `socket_name` ("Surface", "Volume") of the tree's active output
+    node for Cycles, or None."""
+    output = None if tree is None else (tree.get_output_node("CYCLES") or tree.get_output_node("ALL"))
+    if output is None or socket_name not in output.inputs:
+        return None
+    return source(output.inputs[socket_name])
+
+
 def _where(owner: str, node, name: str) -> str:
     return f"{owner} ▸ {node.name} ▸ {name}"
 

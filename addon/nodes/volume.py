@@ -22,7 +22,7 @@ import numpy as np
 from ..tracer import colorimetry, spectra
 from ..tracer.phase import HG_G_LIMIT
 from .notes import Notes
-from .shader_graph import Attribute, Blackbody, colour, number, source
+from .graph import Attribute, Blackbody, colour, number, output_source, source
 
 CYCLES_BLACKBODY_SCALE = 1e-6  # Cycles' Principled Volume: black-body radiance σT⁴/π is scaled by 1e-6
 PHASES = {"HENYEY_GREENSTEIN": "hg", "RAYLEIGH": "rayleigh"}
@@ -160,25 +160,15 @@ def _follow(socket, owner, notes, weight, has_grid, parts):
         _closure(found[0], owner, notes, weight, has_grid, parts)
 
 
-def volume_output(material):
-    """The Volume input of the material's active output for Cycles, or None."""
-    tree = material.node_tree
-    if tree is None:
-        return None
-    output = tree.get_output_node("CYCLES") or tree.get_output_node("ALL")
-    return None if output is None else output.inputs.get("Volume")
-
-
 def has_volume_shader(material) -> bool:
-    socket = volume_output(material)
-    return socket is not None and source(socket) is not None
+    return output_source(material.node_tree, "Volume") is not None
 
 
 def read_volume_shader(material, has_grid, notes: Notes) -> list:
     """The weighted Scattering and Glow parts of the material's volume shader; `has_grid(name)` says whether
     the volume has an attribute grid of that name."""
     parts = []
-    socket = volume_output(material)
-    if socket is not None:
-        _follow(socket, f"material {material.name!r}", notes, 1.0, has_grid, parts)
+    found = output_source(material.node_tree, "Volume")
+    if found is not None:
+        _closure(found[0], f"material {material.name!r}", notes, 1.0, has_grid, parts)
     return parts
