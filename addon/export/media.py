@@ -97,7 +97,8 @@ def _scattering_media(name: str, parts, fields) -> dict:
         extinction = scattering + absorption
         if np.any(extinction > 0):
             media[(grid, phase, anisotropy)] = Medium(
-                name=name, density=fields.grid(grid), density_scale=1.0, extinction=Spectrum(extinction),
+                name=name, density=fields.grid(grid), density_scale=fields.density_scale,
+                extinction=Spectrum(extinction),
                 albedo_densities=np.zeros(1), albedo_table=_albedo(scattering, extinction)[None, :],
                 anisotropy=spectra.constant(anisotropy), phase=phase)
     return media
@@ -137,7 +138,8 @@ def shader_media(name: str, material, fields, notes) -> list[Medium]:
             media[key] = dataclasses.replace(media[key], glow=glow)
         else:
             media[(grid, "glow", 0.0)] = Medium(
-                name=name, density=fields.grid(grid), density_scale=1.0, extinction=spectra.constant(0.0),
+                name=name, density=fields.grid(grid), density_scale=fields.density_scale,
+                extinction=spectra.constant(0.0),
                 albedo_densities=np.zeros(1), albedo_table=np.zeros((1, GRID.size)),
                 anisotropy=spectra.constant(0.0), glow=glow)
     return list(media.values())

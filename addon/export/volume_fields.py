@@ -2,7 +2,9 @@
 region its shader fills (where a constant Density or an emission applies), all in world space.
 
 - Volume objects: the VDB's grids; the region is where the object's Density Grid (or its first grid)
-  exceeds the volume's Clipping, as Cycles bounds a volume by its voxels above it.
+  exceeds the volume's Clipping, as Cycles bounds a volume by its voxels above it. With the volume's
+  Space set to Object (Blender's default), Cycles scales its shader's density and emission by the
+  object's scale: 1 / |M (1, 1, 1)/√3| (`density_scale`).
 - Fluid domains: the cache's `density`, `flame` and `heat` grids, and `temperature` as Cycles reads it
   from the flame (ignition + flame × (maximum − ignition) where flame > 0.01, else 0: 0..1 is 0..1000 K
   for the Temperature input); the region is the whole domain.
@@ -30,6 +32,10 @@ class VolumeFields:
         self.obj, self.depsgraph, self.matrix = obj, depsgraph, matrix
         self.domain = fluid_domain(obj) if obj.type == "MESH" else None
         self._grids: dict = {}
+        self.density_scale = 1.0
+        if obj.type == "VOLUME" and obj.data.render.space == "OBJECT":
+            diagonal = np.array(matrix.to_3x3(), dtype=np.float64) @ np.full(3, 1.0 / np.sqrt(3.0))
+            self.density_scale = 1.0 / float(np.linalg.norm(diagonal))
         if obj.type == "VOLUME":
             self.names = tuple(grid.name for grid in obj.data.grids)
         elif self.domain is not None:

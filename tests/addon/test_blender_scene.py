@@ -187,3 +187,30 @@ def test_turning_spectral_volume_on_starts_from_the_node_values(factory):
                                (before.extinction.values * before.density_scale)[visible], rtol=0.02)
     np.testing.assert_allclose(after.albedo_table[0][visible], before.albedo_table[0][visible], atol=0.02)
     assert after.anisotropy.values[0] == pytest.approx(0.6, abs=1e-6) and after.phase == "hg"
+
+
+def test_vdb_volume_with_a_principled_volume_matches_cycles(registered, tmp_path):
+    """A Volume object (a smooth ball in a VDB file) with an ordinary Principled Volume reading its
+    "density" grid, under a sun: what Cycles renders, not an error."""
+    from tests.addon.test_cycles_emulation import write_blob
+
+    scene = factory_scene()
+    for name in ("Cube", "Light"):
+        bpy.data.objects.remove(bpy.data.objects[name])
+    scene.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    scene.collection.objects.link(sun)
+    sun.data.energy, sun.data.angle = 4.0, 0.0
+    sun.rotation_euler = (math.radians(40), 0.0, math.radians(30))
+    volume = bpy.data.volumes.new("Ball")
+    volume.filepath = str(write_blob(tmp_path / "ball.vdb"))
+    ball = bpy.data.objects.new("Ball", volume)
+    scene.collection.objects.link(ball)
+    ball.scale = (1.5, 1.5, 1.5)
+    material = bpy.data.materials.new("Smoke")
+    volume_shader(material, Color=(0.8, 0.8, 0.8), Density=4.0, Anisotropy=0.4)
+    volume.materials.append(material)
+    delta_e, z, traced, cycled, warnings = compare(scene, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
+    assert warnings == []
+    assert delta_e < GREY_DELTA_E and z < NOISE_BOUND and cycled.mean() > 0.01
