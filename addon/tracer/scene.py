@@ -22,7 +22,7 @@ from .colorimetry import CMF_NAMES as CMFS
 from .errors import SpectralError
 from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, PHASES, WAVELENGTHS_PER_PATH
 from .phase import HG_G_LIMIT
-from .spectra import Spectrum
+from .spectra import Spectrum, constant
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
@@ -50,6 +50,11 @@ class Grid:
     index_to_world: np.ndarray  # (4, 4) float64
     name: str = "density"
 
+    def world_diagonal(self) -> float:
+        """The length of the world-space diagonal of the box its cells fill."""
+        shape = np.array(self.values.shape, dtype=np.float64)
+        return float(np.linalg.norm(np.asarray(self.index_to_world, dtype=np.float64)[:3, :3] @ shape))
+
 
 @dataclass(frozen=True, eq=False)
 class Fluorescence:
@@ -75,6 +80,22 @@ class BlackbodyEmission:
 
 
 @dataclass(frozen=True, eq=False)
+class Glow:
+    """Emission that does not depend on absorption, as Blender's Cycles defines it, per unit length:
+    density(x) · density_scale · [spectrum(λ) + blackbody · tint(λ) · Lbb(λ, T(x))] in W·m⁻²·sr⁻¹·nm⁻¹ per
+    Blender unit, where Lbb is Planck's law scaled to luminance σT⁴/π (Cycles' black body; `glow.py`).
+    T(x) = temperature(x) · temperature_scale + temperature_offset in kelvin, where a missing grid (and a
+    grid outside its box) reads 0: without a grid the temperature is `temperature_offset` everywhere."""
+
+    spectrum: Spectrum | None = None  # radiance per unit length per unit scaled density (None: 0)
+    blackbody: float = 0.0  # weight of the normalised black body (Cycles' Blackbody Intensity × 1e-6)
+    tint: Spectrum = field(default_factory=lambda: constant(1.0))
+    temperature: Grid | None = None
+    temperature_scale: float = 1.0
+    temperature_offset: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
 class Medium:
     """A heterogeneous participating medium.
 
@@ -93,6 +114,11 @@ class Medium:
     phase: str = "hg"  # "hg" | "rayleigh"
     fluorescence: Fluorescence | None = None
     emission: BlackbodyEmission | None = None
+    glow: Glow | None = None
+
+    def emits(self) -> bool:
+        """Whether the medium is a source of light: thermal emission or a glow."""
+        return self.emission is not None or self.glow is not None
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,7 +207,7 @@ class Scene:
             _check_medium(medium, f"media[{index}]")
         for index, light in enumerate(self.lights):
             _check_light(light, f"lights[{index}]", self.settings.cmf)
-        if not self.lights and not any(medium.emission is not None for medium in self.media):
+        if not self.lights and not any(medium.emits() for medium in self.media):
             raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point or spot "
                                 "light (or an emitting medium)")
         if self.lights and not any(light.strength > 0 for light in self.lights):
@@ -228,6 +254,11 @@ def _check_medium(medium: Medium, where: str) -> None:
         _check_fluorescence(medium.fluorescence, f"{where}.fluorescence")
     if medium.emission is not None:
         _check_emission(medium.emission, f"{where}.emission")
+    if medium.glow is not None:
+        if medium.emission is not None:
+            raise SpectralError(f"{where}.glow: a medium has one temperature, so it takes either \"emission\" "
+                                "(thermal) or \"glow\", not both")
+        _check_glow(medium.glow, f"{where}.glow")
 
 
 def optical_depth(medium: Medium) -> float:
@@ -236,8 +267,7 @@ def optical_depth(medium: Medium) -> float:
     extinction = medium.extinction.values
     if medium.fluorescence is not None:
         extinction = extinction + medium.fluorescence.excitation.values
-    shape = np.array(medium.density.values.shape, dtype=np.float64)
-    diagonal = float(np.linalg.norm(np.asarray(medium.density.index_to_world, dtype=np.float64)[:3, :3] @ shape))
+    diagonal = medium.density.world_diagonal()
     return float(medium.density_scale * extinction.max() * medium.density.values.max()) * diagonal
 
 
@@ -281,12 +311,30 @@ def _check_fluorescence(fluorescence: Fluorescence, where: str) -> None:
 
 
 def _check_emission(emission: BlackbodyEmission, where: str) -> None:
-    _check_grid(emission.temperature, f"{where}.temperature", nonnegative=False)
-    scale = checks.number(emission.temperature_scale, f"{where}.temperature_scale")
-    offset = checks.number(emission.temperature_offset, f"{where}.temperature_offset")
     checks.within(checks.number(emission.intensity, f"{where}.intensity"), f"{where}.intensity", 0.0)
-    values = emission.temperature.values
-    coldest = min(float(values.min()) * scale, float(values.max()) * scale) + offset
+    _check_temperature(emission.temperature, emission.temperature_scale, emission.temperature_offset, where)
+
+
+def _check_glow(glow: Glow, where: str) -> None:
+    if glow.spectrum is not None:
+        checks.spectrum_within(glow.spectrum.values, f"{where}.spectrum", "a glow must not be negative", 0.0, np.inf)
+    blackbody = checks.within(checks.number(glow.blackbody, f"{where}.blackbody"), f"{where}.blackbody", 0.0)
+    checks.spectrum_within(glow.tint.values, f"{where}.tint", "a tint must not be negative", 0.0, np.inf)
+    _check_temperature(glow.temperature, glow.temperature_scale, glow.temperature_offset, where)
+    if blackbody > 0 and glow.temperature is None and glow.temperature_offset == 0:
+        raise SpectralError(f"{where}.temperature: a black-body glow needs a temperature: a grid, or a constant "
+                            "temperature_offset in kelvin")
+
+
+def _check_temperature(grid: Grid | None, scale, offset, where: str) -> None:
+    """Temperature = grid value × scale + offset (a missing grid reads 0) must be non-negative kelvin."""
+    if grid is not None:
+        _check_grid(grid, f"{where}.temperature", nonnegative=False)
+    scale = checks.number(scale, f"{where}.temperature_scale")
+    offset = checks.number(offset, f"{where}.temperature_offset")
+    coldest = offset
+    if grid is not None:
+        coldest += min(float(grid.values.min()) * scale, float(grid.values.max()) * scale)
     if coldest < 0:
         raise SpectralError(f"{where}: temperatures (grid value × temperature_scale + temperature_offset) must be "
                             f"non-negative kelvin, found {coldest:g} K")
