@@ -47,12 +47,13 @@ def as_spectrum(value) -> spectra.Spectrum:
 
 
 def medium(density: Grid, scale: float = 1.0, *, name: str = "medium", extinction=1.0, albedo=1.0, g=0.0,
-           phase: str = "hg", fluorescence=None, emission=None) -> Medium:
+           phase: str = "hg", fluorescence=None, emission=None, glow=None) -> Medium:
     """A medium whose extinction, albedo (the same at every density) and anisotropy are numbers or spectra;
     σ_t = density · `scale` · extinction."""
     return Medium(name=name, density=density, density_scale=float(scale), extinction=as_spectrum(extinction),
                   albedo_densities=np.array([0.0]), albedo_table=as_spectrum(albedo).values[None, :],
-                  anisotropy=as_spectrum(g), phase=phase, fluorescence=fluorescence, emission=emission)
+                  anisotropy=as_spectrum(g), phase=phase, fluorescence=fluorescence, emission=emission,
+                  glow=glow)
 
 
 def direction(elevation: float, azimuth: float = 0.0) -> np.ndarray:

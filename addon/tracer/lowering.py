@@ -10,6 +10,7 @@ import numpy as np
 
 from . import colorimetry, sampling
 from .errors import SpectralError
+from .glow import normalisation_table
 from .kernels.layout import (
     CAMERA_KINDS,
     LIGHT_KINDS,
@@ -17,6 +18,7 @@ from .kernels.layout import (
     KernelCamera,
     KernelDensity,
     KernelFluorescence,
+    KernelGlow,
     KernelLights,
     KernelMajorant,
     KernelMedia,
@@ -27,7 +29,7 @@ from .kernels.layout import (
 )
 from .kernels.media import attenuation
 from .lights import selection_powers, strength_scale
-from .majorant import block_size_for, majorant_grid, minorant_grid
+from .majorant import block_size_for, glow_floor, majorant_grid, minorant_grid
 from .scene import Grid, Light, Medium, Scene
 from .wavelength_modes import default_band, with_band
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
@@ -53,9 +55,9 @@ def _flatten(arrays):
     return data, offsets, shapes
 
 
-def _media_arrays(media: tuple[Medium, ...]) -> dict:
+def _media_arrays(media: tuple[Medium, ...], cmf: str) -> dict:
     """The kernel scene's groups that describe the media, by name: `density`, `majorant`, `temperature`,
-    `media` and `fluorescence`."""
+    `glow`, `media` and `fluorescence`."""
     count = len(media)
     levels = max([m.albedo_densities.size for m in media], default=1)
     optics = KernelMedia(
@@ -97,35 +99,68 @@ def _media_arrays(media: tuple[Medium, ...]) -> dict:
                             world_to_padded=np.array([_world_to_padded(m.density) for m in media]).reshape(count, 4, 4))
     blocks = [block_size_for(d.shape) for d in densities]
     majorants = [majorant_grid(d, b) for d, b in zip(densities, blocks)]
+    coeff = optics.density_scale * (peak.max(axis=1) if count else np.zeros(0))
+    for index, medium in enumerate(media):
+        if medium.glow is not None:
+            coeff[index] = max(coeff[index], glow_floor(densities[index], medium.density.world_diagonal()))
     majorant = KernelMajorant(*_flatten(majorants),
                               block=np.array(blocks, dtype=np.int64),
-                              coeff=optics.density_scale * (peak.max(axis=1) if count else np.zeros(0)),
+                              coeff=coeff,
                               minorant=_flatten([minorant_grid(d, b) for d, b in zip(densities, blocks)])[0])
-    return {"density": density, "majorant": majorant, "temperature": _temperature_grids(media), "media": optics,
-            "fluorescence": fluorescence}
+    return {"density": density, "majorant": majorant, "temperature": _temperature_grids(media),
+            "glow": _glow_arrays(media, cmf), "media": optics, "fluorescence": fluorescence}
+
+
+# A black-body glow without a temperature grid reads this one-cell grid of 0: its temperature_offset everywhere.
+_NO_TEMPERATURE_GRID = Grid(np.zeros((1, 1, 1), dtype=np.float32), np.eye(4), name="constant temperature")
+
+
+def _temperature(medium: Medium) -> tuple[Grid, float, float, float] | None:
+    """A medium's temperature (grid, scale, offset) and thermal intensity, or None where it emits no black body."""
+    if medium.emission is not None:
+        emission = medium.emission
+        return emission.temperature, emission.temperature_scale, emission.temperature_offset, emission.intensity
+    glow = medium.glow
+    if glow is not None and glow.blackbody > 0:
+        grid = glow.temperature if glow.temperature is not None else _NO_TEMPERATURE_GRID
+        return grid, glow.temperature_scale, glow.temperature_offset, 0.0
+    return None
 
 
 def _temperature_grids(media: tuple[Medium, ...]) -> KernelTemperature:
-    """The emitting media's temperature grids, one after another (offset -1 for a medium without emission)."""
+    """The temperature grids of the media emitting a black body, one after another (offset -1 for the others)."""
     count = len(media)
     offset = np.full(count, -1, dtype=np.int64)
     world_to_padded = np.tile(np.eye(4), (count, 1, 1))
     temperature_map = np.zeros((count, 3))
+    shape = np.zeros((count, 3), dtype=np.int64)
     temperatures = []
     for index, medium in enumerate(media):
-        if medium.emission is None:
+        temperature = _temperature(medium)
+        if temperature is None:
             continue
-        emission = medium.emission
+        grid, scale, shift, intensity = temperature
         offset[index] = sum(t.size for t in temperatures)
-        temperatures.append(np.asarray(emission.temperature.values, dtype=np.float32))
-        world_to_padded[index] = _world_to_padded(emission.temperature)
-        temperature_map[index] = (emission.temperature_scale, emission.temperature_offset, emission.intensity)
-    shape = np.zeros((count, 3), dtype=np.int64)
-    for index, medium in enumerate(media):
-        if medium.emission is not None:
-            shape[index] = medium.emission.temperature.values.shape
+        temperatures.append(np.asarray(grid.values, dtype=np.float32))
+        world_to_padded[index] = _world_to_padded(grid)
+        temperature_map[index] = (scale, shift, intensity)
+        shape[index] = grid.values.shape
     return KernelTemperature(data=_flatten(temperatures)[0], offset=offset, shape=shape,
                              world_to_padded=world_to_padded, map=temperature_map)
+
+
+def _glow_arrays(media: tuple[Medium, ...], cmf: str) -> KernelGlow:
+    """The media's glows on the grid and the black body's normalisation table for the render's CMFs."""
+    count = len(media)
+    glow = KernelGlow(np.zeros(count, dtype=np.bool_), np.zeros((count, GRID.size)), np.zeros((count, GRID.size)),
+                      *normalisation_table(cmf))
+    for index, medium in enumerate(media):
+        if medium.glow is not None:
+            glow.glowing[index] = True
+            if medium.glow.spectrum is not None:
+                glow.spectrum[index] = medium.glow.spectrum.values
+            glow.blackbody[index] = medium.glow.blackbody * medium.glow.tint.values
+    return glow
 
 
 def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str) -> KernelLights:
@@ -186,7 +221,7 @@ def compile_scene(scene: Scene) -> KernelScene:
             height=int(camera.height),
             extent=camera_extent(camera),
         ),
-        **_media_arrays(scene.media),
+        **_media_arrays(scene.media, settings.cmf),
         lights=_light_arrays(scene.lights, scene.media, settings.cmf),
         wavelengths=KernelWavelengths(
             cdf=np.zeros(GRID.size),

@@ -10,10 +10,23 @@ density).
 
 Free flights track against the majorant; shadow rays towards delta lights, and those of grey paths,
 track the minorant's extinction analytically and only the residual against the majorant (residual ratio
-tracking).
+tracking). A glowing medium's majorant coefficient has a floor (`glow_floor`): its emission is collected
+at tentative collisions, which a medium that barely attenuates would otherwise hardly have.
 """
 
 import numpy as np
+
+
+# Tentative collisions a ray meets along a glowing medium's grid diagonal, at least, where the density is
+# largest: each collects the glow (docs/algorithm.md).
+GLOW_COLLISIONS = 8
+
+
+def glow_floor(values: np.ndarray, diagonal: float) -> float:
+    """The least majorant coefficient per unit raw density of a glowing medium whose grid holds `values` and
+    has a world diagonal `diagonal` long: GLOW_COLLISIONS per diagonal at its largest density (0 if empty)."""
+    peak = float(np.max(values))
+    return GLOW_COLLISIONS / (diagonal * peak) if peak > 0 else 0.0
 
 
 def block_size_for(shape, target_blocks: int = 16) -> int:

@@ -50,6 +50,11 @@ class Grid:
     index_to_world: np.ndarray  # (4, 4) float64
     name: str = "density"
 
+    def world_diagonal(self) -> float:
+        """The length of the world-space diagonal of the box its cells fill."""
+        shape = np.array(self.values.shape, dtype=np.float64)
+        return float(np.linalg.norm(np.asarray(self.index_to_world, dtype=np.float64)[:3, :3] @ shape))
+
 
 @dataclass(frozen=True, eq=False)
 class Fluorescence:
@@ -202,7 +207,7 @@ class Scene:
             _check_medium(medium, f"media[{index}]")
         for index, light in enumerate(self.lights):
             _check_light(light, f"lights[{index}]", self.settings.cmf)
-        if not self.lights and not any(medium.emission is not None for medium in self.media):
+        if not self.lights and not any(medium.emits() for medium in self.media):
             raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point or spot "
                                 "light (or an emitting medium)")
         if self.lights and not any(light.strength > 0 for light in self.lights):
@@ -249,6 +254,11 @@ def _check_medium(medium: Medium, where: str) -> None:
         _check_fluorescence(medium.fluorescence, f"{where}.fluorescence")
     if medium.emission is not None:
         _check_emission(medium.emission, f"{where}.emission")
+    if medium.glow is not None:
+        if medium.emission is not None:
+            raise SpectralError(f"{where}.glow: a medium has one temperature, so it takes either \"emission\" "
+                                "(thermal) or \"glow\", not both")
+        _check_glow(medium.glow, f"{where}.glow")
 
 
 def optical_depth(medium: Medium) -> float:
@@ -257,8 +267,7 @@ def optical_depth(medium: Medium) -> float:
     extinction = medium.extinction.values
     if medium.fluorescence is not None:
         extinction = extinction + medium.fluorescence.excitation.values
-    shape = np.array(medium.density.values.shape, dtype=np.float64)
-    diagonal = float(np.linalg.norm(np.asarray(medium.density.index_to_world, dtype=np.float64)[:3, :3] @ shape))
+    diagonal = medium.density.world_diagonal()
     return float(medium.density_scale * extinction.max() * medium.density.values.max()) * diagonal
 
 
@@ -302,12 +311,30 @@ def _check_fluorescence(fluorescence: Fluorescence, where: str) -> None:
 
 
 def _check_emission(emission: BlackbodyEmission, where: str) -> None:
-    _check_grid(emission.temperature, f"{where}.temperature", nonnegative=False)
-    scale = checks.number(emission.temperature_scale, f"{where}.temperature_scale")
-    offset = checks.number(emission.temperature_offset, f"{where}.temperature_offset")
     checks.within(checks.number(emission.intensity, f"{where}.intensity"), f"{where}.intensity", 0.0)
-    values = emission.temperature.values
-    coldest = min(float(values.min()) * scale, float(values.max()) * scale) + offset
+    _check_temperature(emission.temperature, emission.temperature_scale, emission.temperature_offset, where)
+
+
+def _check_glow(glow: Glow, where: str) -> None:
+    if glow.spectrum is not None:
+        checks.spectrum_within(glow.spectrum.values, f"{where}.spectrum", "a glow must not be negative", 0.0, np.inf)
+    blackbody = checks.within(checks.number(glow.blackbody, f"{where}.blackbody"), f"{where}.blackbody", 0.0)
+    checks.spectrum_within(glow.tint.values, f"{where}.tint", "a tint must not be negative", 0.0, np.inf)
+    _check_temperature(glow.temperature, glow.temperature_scale, glow.temperature_offset, where)
+    if blackbody > 0 and glow.temperature is None and glow.temperature_offset == 0:
+        raise SpectralError(f"{where}.temperature: a black-body glow needs a temperature: a grid, or a constant "
+                            "temperature_offset in kelvin")
+
+
+def _check_temperature(grid: Grid | None, scale, offset, where: str) -> None:
+    """Temperature = grid value × scale + offset (a missing grid reads 0) must be non-negative kelvin."""
+    if grid is not None:
+        _check_grid(grid, f"{where}.temperature", nonnegative=False)
+    scale = checks.number(scale, f"{where}.temperature_scale")
+    offset = checks.number(offset, f"{where}.temperature_offset")
+    coldest = offset
+    if grid is not None:
+        coldest += min(float(grid.values.min()) * scale, float(grid.values.max()) * scale)
     if coldest < 0:
         raise SpectralError(f"{where}: temperatures (grid value × temperature_scale + temperature_offset) must be "
                             f"non-negative kelvin, found {coldest:g} K")

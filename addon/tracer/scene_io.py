@@ -16,7 +16,8 @@ from .checks import shown
 from .errors import SpectralError
 from .film import check_film_memory, film_bytes
 from .grids import affine_matrix, load_grid, save_grid_npy
-from .scene import LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
+from .scene import (LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
+                    RenderSettings, Scene)
 from .spectra import Spectrum
 from .wavelengths import GRID
 
@@ -31,12 +32,14 @@ _CAMERA = {
 }
 _MEDIUM = {
     "required": ("density", "extinction", "albedo"),
-    "optional": ("name", "density_scale", "anisotropy", "phase", "fluorescence", "emission"),
+    "optional": ("name", "density_scale", "anisotropy", "phase", "fluorescence", "emission", "glow"),
 }
 _GRID = {"required": ("file",), "optional": ("grid", "index_to_world")}
 _ALBEDO_TABLE = {"required": ("densities", "spectra"), "optional": ()}
 _FLUORESCENCE = {"required": ("excitation", "emission", "quantum_yield"), "optional": ()}
 _EMISSION = {"required": ("temperature",), "optional": ("intensity", "temperature_scale", "temperature_offset")}
+_GLOW = {"required": (),
+         "optional": ("spectrum", "blackbody", "tint", "temperature", "temperature_scale", "temperature_offset")}
 _LIGHT_COMMON = ("kind", "spectrum")
 _LIGHT_OPTIONAL = ("strength", "unit", "name")
 _LIGHT_FIELDS = {
@@ -139,6 +142,7 @@ def _medium(value, where: str, folder: Path) -> Medium:
     data = _fields(value, where, _MEDIUM)
     fluorescence = data.get("fluorescence")
     emission = data.get("emission")
+    glow = data.get("glow")
     densities, table = _albedo(data["albedo"], f"{where}.albedo", folder)
     return Medium(
         name=data.get("name", where),
@@ -151,6 +155,7 @@ def _medium(value, where: str, folder: Path) -> Medium:
         phase=data.get("phase", Medium.phase),
         fluorescence=None if fluorescence is None else _fluorescence(fluorescence, f"{where}.fluorescence", folder),
         emission=None if emission is None else _emission(emission, f"{where}.emission", folder),
+        glow=None if glow is None else _glow(glow, f"{where}.glow", folder),
     )
 
 
@@ -205,6 +210,17 @@ def _emission(value, where: str, folder: Path) -> BlackbodyEmission:
         temperature_scale=checks.number(data.get("temperature_scale", 1.0), f"{where}.temperature_scale"),
         temperature_offset=checks.number(data.get("temperature_offset", 0.0), f"{where}.temperature_offset"),
     )
+
+
+def _glow(value, where: str, folder: Path) -> Glow:
+    """A glow from the fields given (the others take `Glow`'s defaults)."""
+    data = _fields(value, where, _GLOW)
+    given = {key: _spectrum(data[key], f"{where}.{key}", folder) for key in ("spectrum", "tint") if key in data}
+    given.update({key: checks.number(data[key], f"{where}.{key}")
+                  for key in ("blackbody", "temperature_scale", "temperature_offset") if key in data})
+    if "temperature" in data:
+        given["temperature"] = _grid(data["temperature"], f"{where}.temperature", folder, nonnegative=False)
+    return Glow(**given)
 
 
 def _light(value, where: str, folder: Path) -> Light:
@@ -342,6 +358,17 @@ def _medium_json(medium: Medium, index: int, folder: Path) -> dict:
             "temperature_scale": float(medium.emission.temperature_scale),
             "temperature_offset": float(medium.emission.temperature_offset),
         }
+    if medium.glow is not None:
+        data["glow"] = _glow_json(medium.glow, index, folder)
+    return data
+
+
+def _glow_json(glow: Glow, index: int, folder: Path) -> dict:
+    data = {} if glow.spectrum is None else {"spectrum": _spectrum_json(glow.spectrum)}
+    data.update(blackbody=float(glow.blackbody), tint=_spectrum_json(glow.tint))
+    if glow.temperature is not None:
+        data["temperature"] = _grid_json(glow.temperature, f"media{index}_glow_temperature.npy", folder)
+    data.update(temperature_scale=float(glow.temperature_scale), temperature_offset=float(glow.temperature_offset))
     return data
 
 
@@ -440,6 +467,8 @@ def _describe_medium(medium: Medium) -> str:
         text += f", fluorescent (quantum yield {medium.fluorescence.quantum_yield:g})"
     if medium.emission is not None:
         text += f", blackbody emission from grid {medium.emission.temperature.name!r}"
+    if medium.glow is not None:
+        text += ", glowing"
     return text
 
 

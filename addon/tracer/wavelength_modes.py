@@ -8,6 +8,7 @@ import numpy as np
 from . import sampling
 from .errors import SpectralError
 from .kernels.layout import LIGHT_SKY, KernelScene
+from .kernels.media import blackbody_normalisation, glow_emission
 from .planck import planck_radiance
 from .spectra import Spectrum
 from .wavelengths import GRID, LAMBDA_MIN
@@ -23,8 +24,8 @@ LIGHT_MODE_DEFENSIVE_SHARE = 0.2
 def light_mode_sources(kernel_scene: KernelScene) -> list[tuple[Spectrum, float]]:
     """The spectra the `light` mode follows, as (spectrum, weight): each light's spectrum weighted by its
     next-event selection probability (a sky's zenith and horizon spectra half each), then, with the lights
-    together weighing 1, each emitting medium's black body at its hottest temperature and each fluorophore's
-    emission spectrum weighing 1 each."""
+    together weighing 1, each emitting medium's black body at its hottest temperature (a glowing medium's glow
+    there) and each fluorophore's emission spectrum weighing 1 each."""
     ks = kernel_scene
     sources = []
     for kind, spd, horizon, pmf in zip(ks.lights.kind, ks.lights.spd, ks.lights.spd_horizon, ks.lights.pmf):
@@ -33,12 +34,19 @@ def light_mode_sources(kernel_scene: KernelScene) -> list[tuple[Spectrum, float]
         else:
             sources.append((Spectrum(spd), pmf))
     for m, offset in enumerate(ks.temperature.offset):
+        hottest = 0.0
         if offset >= 0:
             size = int(np.prod(ks.temperature.shape[m]))
             scale, shift, _ = ks.temperature.map[m]
             hottest = scale * float(ks.temperature.data[offset:offset + size].max(initial=0.0)) + shift
-            if hottest > 0:
-                sources.append((Spectrum(planck_radiance(GRID, min(hottest, BLACKBODY_SHAPE_MAX_KELVIN))), 1.0))
+        planck = planck_radiance(GRID, min(hottest, BLACKBODY_SHAPE_MAX_KELVIN))
+        if ks.glow.glowing[m]:
+            shape = glow_emission(1.0, ks.glow.spectrum[m], ks.glow.blackbody[m], planck,
+                                  blackbody_normalisation(ks, hottest))
+            if shape.any():
+                sources.append((Spectrum(shape), 1.0))
+        elif hottest > 0:
+            sources.append((Spectrum(planck), 1.0))
     sources += [(Spectrum(pdf), 1.0) for pdf in ks.fluorescence.emission_pdf if pdf.any()]
     return sources
 

@@ -27,7 +27,7 @@ from addon.tracer.lowering import compile_scene
 from addon.tracer.film import Film
 from addon.tracer.kernels import numpy_backend
 from addon.tracer.render import band_scenes, render, render_unit
-from addon.tracer.scene import BlackbodyEmission, Fluorescence, Grid, Light, Medium
+from addon.tracer.scene import BlackbodyEmission, Fluorescence, Glow, Grid, Light, Medium
 from addon.tracer.wavelengths import GRID
 from tests.support import libm_numpy
 from tests.support import scenes as s
@@ -93,6 +93,15 @@ def blackbody():
     return s.scene(s.perspective_camera(8, 8), [medium], [])
 
 
+def glow():
+    """A thin, chromatic scattering medium glowing (a band and a tinted 1000–3000 K black body) under a delta sun:
+    its majorant is the glow's floor, so most tentative collisions are null."""
+    hot = Glow(spectrum=spectra.gaussian(620, 30, 0.3), blackbody=1e-6, tint=s.smooth_ramp(0.3, 1.0),
+               temperature=blob_grid(seed=4), temperature_scale=2000.0, temperature_offset=1000.0)
+    medium = s.medium(blob_grid(seed=5), extinction=s.smooth_ramp(0.6, 0.2), albedo=0.8, g=0.4, glow=hot)
+    return s.scene(s.perspective_camera(8, 8), [medium], [s.sun([0.2, -0.5, 1.0], 0.5)])
+
+
 def rayleigh():
     """Rayleigh phase under a sky, one wavelength per path drawn uniformly."""
     sky = Light(kind="sky", spectrum=s.smooth_ramp(2.0, 0.3), strength=1.0,
@@ -120,7 +129,7 @@ def point_and_spot():
 
 
 SCENES = {build.__name__: build for build in (grey_furnace, chromatic, heterogeneous, fluorescence, blackbody,
-                                              rayleigh, two_media, point_and_spot)}
+                                              glow, rayleigh, two_media, point_and_spot)}
 
 
 def render_film(scene, backend, seed, spp=SPP) -> Film:

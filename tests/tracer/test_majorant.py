@@ -8,8 +8,12 @@ everywhere in the block, and residual ratio tracking only if its minorant is at 
 import numpy as np
 import pytest
 
+from addon.tracer import spectra
 from addon.tracer.kernels.lookups import trilinear
-from addon.tracer.majorant import block_size_for, majorant_grid, minorant_grid
+from addon.tracer.lowering import compile_scene
+from addon.tracer.majorant import GLOW_COLLISIONS, block_size_for, majorant_grid, minorant_grid
+from addon.tracer.scene import Glow
+from tests.support import scenes as s
 
 
 @pytest.mark.parametrize("shape, block", [((10, 7, 5), 3), ((16, 16, 16), 2), ((5, 5, 5), 6), ((12, 9, 20), None)])
@@ -36,3 +40,15 @@ def test_block_bounds_hold_the_interpolated_density(shape, block):
     expected = interior[0][:, None, None] & interior[1][None, :, None] & interior[2][None, None, :]
     np.testing.assert_array_equal(lower > 0.0, expected)
     assert upper.max() == values.max()
+
+
+@pytest.mark.parametrize("extinction", [0.0, 0.1, 50.0])
+def test_a_glow_raises_the_majorant_to_its_floor(extinction):
+    """A glowing medium's majorant coefficient is at least GLOW_COLLISIONS per world diagonal at its largest
+    density, and its extinction's where that is more; a medium without a glow keeps its extinction's."""
+    box = s.box_grid(cells=(8, 8, 4), size=(4.0, 2.0, 1.0), density=2.0)  # diagonal √21
+    plain = s.medium(box, 3.0, extinction=extinction)
+    glowing = s.medium(box, 3.0, extinction=extinction, glow=Glow(spectrum=spectra.constant(1.0)))
+    coeff = compile_scene(s.scene(s.ortho_camera(), [plain, glowing], [s.sun([0, 0, 1])])).majorant.coeff
+    assert coeff[0] == 3.0 * extinction
+    assert coeff[1] == pytest.approx(max(3.0 * extinction, GLOW_COLLISIONS / (np.sqrt(21.0) * 2.0)), rel=1e-12)

@@ -11,7 +11,8 @@ import pytest
 
 from addon.tracer import spectra
 from addon.tracer.errors import SpectralError
-from addon.tracer.scene import BlackbodyEmission, Camera, Fluorescence, Grid, Light, Medium, RenderSettings, Scene
+from addon.tracer.scene import (BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium, RenderSettings,
+                                Scene)
 from addon.tracer.scene_io import load_scene, save_scene, validate_scene
 from addon.tracer.spectra import Spectrum
 from addon.tracer.wavelengths import GRID
@@ -39,9 +40,12 @@ def full_scene() -> Scene:
             Grid(rng.random((2, 3, 4), dtype=np.float32), np.diag([2.0, 2, 2, 1]), "heat"), 0.7, 1200.0, 250.0
         ),
     )
+    glow = Glow(spectrum=spectra.gaussian(610, 30, 0.2), blackbody=2e-6, tint=spectra.gaussian(500, 200),
+                temperature=Grid(rng.random((3, 2, 2), dtype=np.float32), np.diag([0.5, 0.5, 0.5, 1]), "flame"),
+                temperature_scale=900.0, temperature_offset=400.0)
     haze = dataclasses.replace(
         smoke, name="haze", albedo_densities=np.array([0.0]), albedo_table=np.full((1, GRID.size), 0.99),
-        phase="rayleigh", fluorescence=None, emission=None, anisotropy=spectra.constant(0.0),
+        phase="rayleigh", fluorescence=None, emission=None, glow=glow, anisotropy=spectra.constant(0.0),
     )
     lights = (
         Light("sun", spectra.gaussian(560, 100), 2.5, direction=np.array([0.6, 0, 0.8]), angle=0.0093, name="Sun"),
@@ -97,7 +101,19 @@ def test_saved_file_is_readable_json(tmp_path):
     assert data["media"][1]["albedo"] == 0.99 and data["media"][1]["extinction"]["type"] == "table"
     assert '"to_world": [[' in text  # matrices on one line, not one number per line
     grid_files = sorted(p.name for p in tmp_path.glob("*.npy"))
-    assert grid_files == ["media0_density.npy", "media0_temperature.npy", "media1_density.npy"]
+    assert grid_files == ["media0_density.npy", "media0_temperature.npy", "media1_density.npy",
+                          "media1_glow_temperature.npy"]
+    assert data["media"][1]["glow"]["temperature"]["grid"] == "flame"
+
+
+@pytest.mark.parametrize("glow", [Glow(spectrum=spectra.constant(0.5)),
+                                  Glow(blackbody=1e-6, temperature_offset=1800.0)], ids=["spectrum", "constant-temperature"])
+def test_a_glow_round_trips_with_its_defaults(tmp_path, glow):
+    """Fields left at their defaults round-trip, and a glow at constant temperature writes no grid."""
+    scene = dataclasses.replace(full_scene(), media=(dataclasses.replace(full_scene().media[1], glow=glow),))
+    path = save_scene(scene, tmp_path)
+    assert_same(scene, load_scene(path))
+    assert sorted(p.name for p in tmp_path.glob("*.npy")) == ["media0_density.npy"]
 
 
 def test_tiny_scene_fixture_loads(tiny_scene):
@@ -121,6 +137,9 @@ def test_documented_example_loads(openvdb, write_scene):
     assert smoke.albedo_table[1][GRID == 600] == pytest.approx(0.9)
     assert smoke.fluorescence.quantum_yield == 0.6
     assert smoke.emission.temperature.name == "temperature" and smoke.emission.temperature_scale == 1500.0
+    lamp = scene.media[1].glow
+    assert lamp.temperature is None and lamp.temperature_offset == 2700.0 and lamp.blackbody == 1e-6
+    assert lamp.spectrum.values[GRID == 610] == pytest.approx(0.2) and np.all(lamp.tint.values == 1.0)
     sun, sky, spot = scene.lights
     assert np.linalg.norm(sun.direction) == pytest.approx(1.0) and sun.angle == pytest.approx(np.radians(0.526))
     assert sky.horizon_spectrum is not None
@@ -235,6 +254,18 @@ BAD = [
      ["media[0].emission: temperatures", "found -99.9", " K"]),
     ("media[0].emission", {"temperature": {"file": "nowhere.npy", "index_to_world": np.eye(4).tolist()}},
      ["media[0].emission.temperature", "nowhere.npy does not exist"]),
+    ("media[0].glow", {"spectrum": -1}, ["media[0].glow.spectrum: a glow must not be negative, found -1"]),
+    ("media[0].glow", {"blackbody": -1e-6}, ["media[0].glow.blackbody: must be within [0, inf], found -1e-06"]),
+    ("media[0].glow", {"blackbody": 1, "tint": -0.5, "temperature_offset": 1000},
+     ["media[0].glow.tint: a tint must not be negative, found -0.5"]),
+    ("media[0].glow", {"blackbody": 1}, ["media[0].glow.temperature: a black-body glow needs a temperature"]),
+    ("media[0].glow", {"blackbody": 1, "temperature_offset": -5}, ["media[0].glow: temperatures", "found -5 K"]),
+    ("media[0].glow", {"spectrum": 1, "temperature": {"file": "density.npy", "index_to_world": np.eye(4).tolist()},
+                       "temperature_scale": -100}, ["media[0].glow: temperatures", "found -100 K"]),
+    ("media[0].glow", {"blackbody": 1, "temperature": {"file": "nowhere.npy", "index_to_world": np.eye(4).tolist()}},
+     ["media[0].glow.temperature", "nowhere.npy does not exist"]),
+    ("media[0].glow", {"colour": 1}, ["media[0].glow: unknown field 'colour'", "allowed: spectrum, blackbody, tint"]),
+    ("media[0].glow", {"temperature_offset": "hot"}, ["media[0].glow.temperature_offset", "'hot'"]),
     ("media[0].density.file", "absent.npy", ["media[0].density", "absent.npy does not exist"]),
     ("media[0].density.file", 3, ["media[0].density.file: expected a path"]),
     ("media[0].density.index_to_world", DELETE, ["media[0].density", "needs an index_to_world"]),
@@ -380,6 +411,10 @@ INVALID_SCENES = {
     "phase": (lambda s: _medium(s, phase="mie"), "media[0].phase: unknown value 'mie'"),
     "no lights": (lambda s: dataclasses.replace(s, lights=(), media=(dataclasses.replace(s.media[0], emission=None),)),
                   "lights: the scene has no lights"),
+    "emission and glow": (lambda s: _medium(s, glow=s.media[1].glow),
+                          "media[0].glow: a medium has one temperature, so it takes either"),
+    "negative glow": (lambda s: _medium(s, emission=None, glow=Glow(spectrum=spectra.constant(-1.0))),
+                      "media[0].glow.spectrum: a glow must not be negative"),
     "dark lights": (lambda s: dataclasses.replace(s, lights=tuple(dataclasses.replace(light, strength=0.0)
                                                                   for light in s.lights)),
                     "lights: every light has strength 0"),

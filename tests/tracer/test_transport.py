@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 from addon.tracer import colorimetry, spectra
+from addon.tracer.glow import stefan_boltzmann_radiance
 from addon.tracer.planck import planck_radiance
 from addon.tracer.render import render, render_unit
 from addon.tracer.lowering import compile_scene
 from addon.tracer.errors import SpectralError
-from addon.tracer.scene import BlackbodyEmission, Fluorescence, Grid, Light
+from addon.tracer.scene import BlackbodyEmission, Fluorescence, Glow, Grid, Light
 from addon.tracer.wavelengths import GRID
 from tests.support import scenes as s
 from bench import fluorescence as fluorescence_bench
@@ -213,11 +214,68 @@ def test_blackbody_emission_of_a_thin_hot_slab_matches_planck():
     assert_within(film, expected)
 
 
+GLOW_DEPTH = 1.0
+
+
+def _glowing_box(glow, extinction, backend):
+    """A uniform glowing box (4 × 4 × GLOW_DEPTH, albedo 0) seen face-on through its middle, no lights."""
+    box = s.box_grid(cells=(8, 8, 8), size=(4.0, 4.0, GLOW_DEPTH))
+    return s.scene(s.ortho_camera(8, 8, scale=1.0), [s.medium(box, extinction=extinction, albedo=0.0, glow=glow)],
+                   [], spp=64, seed=3, backend=backend)
+
+
+def _cycles_blackbody(temperature):
+    """Cycles' black body, computed here from its definition: Planck's law scaled to luminance σT⁴/π."""
+    planck = planck_radiance(GRID, temperature)
+    return planck * stefan_boltzmann_radiance(temperature) / xyz_of(planck)[1]
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_glow_of_an_absorbing_box_matches_the_closed_form(backend):
+    """A glow ε(λ) (a spectrum and a tinted 2500 K black body) in a purely absorbing box of chromatic σ_a:
+    L(λ) = ε(λ)/σ_a(λ) · (1 − e^{−σ_a(λ) d}) (ε/σ_a is the same at every density), in X, Y and Z."""
+    sigma, spectrum, tint = s.smooth_ramp(2.0, 0.3), spectra.gaussian(550, 60, 0.8), s.smooth_ramp(0.5, 1.0)
+    glow = Glow(spectrum=spectrum, blackbody=2e-6, tint=tint, temperature_offset=2500.0)
+    film = render(_glowing_box(glow, sigma, backend)).film
+    emission = spectrum.values + 2e-6 * tint.values * _cycles_blackbody(2500.0)
+    expected = xyz_of(emission / sigma.values * -np.expm1(-sigma.values * GLOW_DEPTH))
+    for channel in range(3):
+        assert_within(film, expected[channel], channel)
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_glow_without_extinction_is_collected_by_the_majorant_floor(backend):
+    """An emission-only box (extinction 0): L = ε d. Delta tracking meets it only through the glow's
+    majorant floor."""
+    film = render(_glowing_box(Glow(spectrum=spectra.constant(0.7)), 0.0, backend)).film
+    for channel in range(3):
+        assert_within(film, 0.7 * GLOW_DEPTH * xyz_of(np.ones(GRID.size))[channel], channel)
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+@pytest.mark.parametrize("temperature, grid", [(1500.0, True), (6500.0, False)], ids=["1500K-grid", "6500K-constant"])
+def test_blackbody_glow_has_the_stefan_boltzmann_luminance_and_planck_chromaticity(backend, temperature, grid):
+    """An emission-only box glowing as Cycles' black body at T (from a grid of T/1000 scaled by 1000, or a
+    constant): luminance Y = blackbody · σT⁴/π · d, and X and Z those of Planck's law at that luminance."""
+    blackbody = 1.0 / stefan_boltzmann_radiance(temperature)  # Y = d
+    if grid:  # the grid reaches beyond the box, so T is the same wherever the box glows
+        glow = Glow(blackbody=blackbody, temperature=s.box_grid(size=(6.0, 6.0, 3.0), density=temperature / 1000),
+                    temperature_scale=1000.0)
+    else:
+        glow = Glow(blackbody=blackbody, temperature_offset=temperature)
+    film = render(_glowing_box(glow, 0.0, backend)).film
+    planck = xyz_of(planck_radiance(GRID, temperature))
+    expected = GLOW_DEPTH * planck / planck[1]
+    for channel in range(3):
+        assert_within(film, expected[channel], channel)
+
+
 def test_scene_without_lights_or_emission_is_refused():
     box = s.box_grid()
     scene = s.scene(s.ortho_camera(), [s.medium(box)], [])
     with pytest.raises(SpectralError, match="no lights"):
         compile_scene(scene)
+    compile_scene(s.scene(s.ortho_camera(), [s.medium(box, glow=Glow(spectrum=spectra.constant(1.0)))], []))
 
 
 def test_light_spd_importance_sampling_counts_direct_light_once():

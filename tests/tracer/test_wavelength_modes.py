@@ -11,9 +11,14 @@ import itertools
 import numpy as np
 import pytest
 
-from addon.tracer import spectra
+from addon.tracer import colorimetry, spectra
+from addon.tracer.glow import stefan_boltzmann_radiance
 from addon.tracer.render import render
-from addon.tracer.scene import WAVELENGTH_SAMPLINGS, BlackbodyEmission, Fluorescence, Light
+from addon.tracer.lowering import compile_scene
+from addon.tracer.scene import WAVELENGTH_SAMPLINGS, BlackbodyEmission, Fluorescence, Glow, Light
+from addon.tracer.planck import planck_radiance
+from addon.tracer.wavelength_modes import light_mode_sources
+from addon.tracer.wavelengths import GRID
 from tests.support import scenes as s
 
 SIGMAS = 4.5
@@ -25,6 +30,14 @@ def _blue_light_on_a_hot_slab():
     hot = BlackbodyEmission(temperature=s.box_grid(size=(6.0, 6.0, 3.0), density=1500.0), intensity=30.0)
     blue = s.sun([0, 0, 1], spectrum=spectra.gaussian(450, 15))
     return [s.medium(box, extinction=0.5, albedo=0.5, emission=hot)], [blue]
+
+
+def _blue_light_on_a_glowing_slab():
+    """A blue-only sun on a slab glowing red (a band and a 1200 K black body) that hardly attenuates."""
+    box = s.box_grid(cells=(8, 8, 8), size=(4.0, 4.0, 1.0))
+    red = Glow(spectrum=spectra.gaussian(650, 15, 0.2), blackbody=1e-4, temperature_offset=1200.0)
+    blue = s.sun([0, 0, 1], spectrum=spectra.gaussian(450, 15))
+    return [s.medium(box, extinction=0.05, albedo=0.5, glow=red)], [blue]
 
 
 def _sky_below_the_horizon():
@@ -58,6 +71,7 @@ def _uv_lamp_zero_from_359_nm():
 
 SCENES = {
     "blue light on a 1500 K slab": _blue_light_on_a_hot_slab,
+    "blue light on a glowing slab": _blue_light_on_a_glowing_slab,
     "sky below the horizon": _sky_below_the_horizon,
     "UV lamp with a visible tail and a fluorophore": _uv_lamp_with_a_visible_tail,
     "UV lamp zero from 359 nm and a fluorophore": _uv_lamp_zero_from_359_nm,
@@ -82,3 +96,15 @@ def test_every_wavelength_sampling_mode_agrees_with_every_other(name):
         bound = SIGMAS * np.hypot(error_a, error_b)
         assert np.all(np.abs(mean_a - mean_b) <= bound), (
             f"{a} {mean_a} ± {error_a} vs {b} {mean_b} ± {error_b} (XYZ)")
+
+
+def test_the_light_mode_follows_a_glow():
+    """A glowing medium is a source of the `light` mode: its glow at its hottest temperature, here its band
+    plus Cycles' black body (Planck's law at luminance blackbody · σT⁴/π)."""
+    media, lights = _blue_light_on_a_glowing_slab()
+    sources = light_mode_sources(compile_scene(s.scene(s.ortho_camera(), media, lights)))
+    assert len(sources) == 2 and sources[1][1] == 1.0
+    planck = planck_radiance(GRID, 1200.0)
+    blackbody = planck * stefan_boltzmann_radiance(1200.0) / colorimetry.spectrum_to_xyz(planck)[1]
+    expected = spectra.gaussian(650, 15, 0.2).values + 1e-4 * blackbody
+    np.testing.assert_allclose(sources[1][0].values, expected, rtol=2e-4)

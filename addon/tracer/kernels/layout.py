@@ -63,14 +63,25 @@ class KernelMajorant(NamedTuple):
 
 
 class KernelTemperature(NamedTuple):
-    """The emitting media's temperature grids, flattened like `KernelDensity`, and how each maps to kelvin
-    and emission."""
+    """The temperature grids of the media that emit a black body (thermally or as a glow), flattened like
+    `KernelDensity`, and how each maps to kelvin and thermal emission."""
 
     data: np.ndarray
-    offset: np.ndarray  # (M,) -1 when the medium has no emission
+    offset: np.ndarray  # (M,) -1 when the medium has no temperature
     shape: np.ndarray  # (M, 3)
     world_to_padded: np.ndarray  # (M, 4, 4)
-    map: np.ndarray  # (M, 3): scale, offset, intensity
+    map: np.ndarray  # (M, 3): scale, offset, thermal intensity (0 for a glow)
+
+
+class KernelGlow(NamedTuple):
+    """Each medium's glow, emission per unit scaled density that does not depend on absorption (all zero
+    without one), and the black body's normalisation to luminance σT⁴/π, tabulated over log T."""
+
+    glowing: np.ndarray  # (M,) bool: the medium has a glow
+    spectrum: np.ndarray  # (M, GRID) radiance per unit length per unit scaled density
+    blackbody: np.ndarray  # (M, GRID) blackbody · tint: the weight of the normalised black body
+    log_kelvin: np.ndarray  # (2,) log T of the table's first node and the spacing of its nodes
+    log_normalisation: np.ndarray  # (K,) log((σT⁴/π) / Y(Planck(·, T))) at the nodes
 
 
 class KernelMedia(NamedTuple):
@@ -139,6 +150,7 @@ class KernelScene(NamedTuple):
     density: KernelDensity
     majorant: KernelMajorant
     temperature: KernelTemperature
+    glow: KernelGlow
     media: KernelMedia
     fluorescence: KernelFluorescence
     lights: KernelLights

@@ -22,6 +22,16 @@ def on_grid(lam):
 
 
 @shared
+def evenly_spaced_at(values, first, spacing, x):
+    """A table of `values` at the evenly spaced nodes first + k · spacing, at x: linear between its nodes,
+    clamped to its end values beyond them."""
+    position = np.minimum(np.maximum((x - first) / spacing, 0.0), values.shape[0] - 1.0)
+    index = np.int64(np.minimum(position, values.shape[0] - 2.0))
+    frac = position - index
+    return values[index] * (1.0 - frac) + values[index + 1] * frac
+
+
+@shared
 def table_at(table, row, at):
     """Spectrum `table[row]` (a table of spectra on the grid) at the wavelengths located by `at` (`on_grid`)."""
     index, frac, inside = at

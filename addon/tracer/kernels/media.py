@@ -1,5 +1,5 @@
 """A medium at a point: its density and temperature (grid look-ups), its albedo between density levels,
-the coefficients of a collision there, its thermal emission and its phase function; and the arithmetic of
+the coefficients of a collision there, its thermal emission and glow and its phase function; and the arithmetic of
 tracking against a majorant σ̄ (free paths, null collisions).
 
 Plain arithmetic shared by both backends (`shared_math`): one path's scalars in the Numba kernel, arrays of
@@ -11,11 +11,10 @@ branch on a medium's own parameters, never on a path's values. Part of the kerne
 import numpy as np
 
 from ..phase import hg_pdf, rayleigh_pdf
-from ..planck import planck_radiance
 from ..shared_math import shared
 from .geometry import transform_point
 from .layout import PHASE_RAYLEIGH
-from .lookups import table_at, trilinear
+from .lookups import evenly_spaced_at, table_at, trilinear
 
 
 @shared
@@ -66,9 +65,25 @@ def collision_coefficients(rho, extinction, albedo_value, excitation, fluorescen
 
 
 @shared
-def thermal_emission(plain_absorption, intensity, lam, kelvin):
-    """Thermal emission σ_a · intensity · Planck(λ, T) of the plain absorption (0 where T ≤ 0)."""
-    return plain_absorption * intensity * planck_radiance(lam, kelvin)
+def thermal_emission(plain_absorption, intensity, planck):
+    """Thermal emission σ_a · intensity · Planck(λ, T) of the plain absorption, given Planck(λ, T)."""
+    return plain_absorption * intensity * planck
+
+
+@shared
+def blackbody_normalisation(ks, kelvin):
+    """Cycles' scale of Planck's law at T (K): (σT⁴/π) / Y(Planck(·, T)), its logarithm interpolated linearly
+    in log T on the lowered table (`glow.normalisation_table`), clamped beyond its ends."""
+    log_kelvin = np.log(np.maximum(kelvin, 1e-3))
+    return np.exp(evenly_spaced_at(ks.glow.log_normalisation, ks.glow.log_kelvin[0], ks.glow.log_kelvin[1],
+                                   log_kelvin))
+
+
+@shared
+def glow_emission(rho, spectrum, blackbody, planck, normalisation):
+    """A glow at density ρ (scaled): ρ · (spectrum + blackbody · tint · Lbb), where `blackbody` is
+    blackbody · tint and Lbb = Planck(λ, T) · `normalisation` (`blackbody_normalisation`), given Planck(λ, T)."""
+    return rho * (spectrum + blackbody * (planck * normalisation))
 
 
 @shared

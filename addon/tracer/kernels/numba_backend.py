@@ -20,7 +20,8 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
 - Next-event estimation at every real scattering vertex with ratio-tracked transmittance (residual
   ratio tracking towards delta lights and on grey paths), combined with phase sampling by MIS for
   environment, sky and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
-- Thermal emission σ_a·Planck(T) is collected at every tentative collision.
+- Thermal emission σ_a·Planck(T) and glow (emission that does not depend on absorption) are collected at every
+  tentative collision.
 
 Structure: `render_tile` runs runs of pixels in parallel (`_render_runs`); `_render_pixels` makes a run's buffers once
 (each allocation updates Numba's global counters atomically) and `_render_samples` runs a pixel's samples, each through
@@ -48,6 +49,7 @@ from numba.extending import intrinsic
 
 from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import INV_FOUR_PI, hg_sample_cos, rayleigh_sample_cos, sample_direction
+from ..planck import planck_radiance
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
@@ -64,9 +66,11 @@ from .lookups import on_grid, table_at
 from .media import (
     albedo,
     attenuation,
+    blackbody_normalisation,
     collision_coefficients,
     density,
     free_path,
+    glow_emission,
     null_fraction,
     phase_pdf,
     temperature,
@@ -84,8 +88,9 @@ MAX_LAMBDAS = MAX_WAVELENGTHS_PER_PATH
 INF = np.inf
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_ABSORB = 0, 1, 2
 # Rows of the per-path spectral cache spec[medium, row, wavelength] (filled when wavelengths change).
-SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO = 0, 1, 2, 3, 4
-SPEC_ROWS = 5
+SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO, SPEC_GLOW, SPEC_GLOW_BLACKBODY = (
+    0, 1, 2, 3, 4, 5, 6)
+SPEC_ROWS = 7
 
 
 # ----------------------------------------------------------------------------- small helpers
@@ -156,6 +161,8 @@ def _fill_spectral_cache(ks, lams, n, spec):
             spec[m, SPEC_EMISSION_PDF, i] = table_at(ks.fluorescence.emission_pdf, m, at)
             spec[m, SPEC_ANISOTROPY, i] = table_at(ks.media.anisotropy, m, at)
             spec[m, SPEC_ALBEDO, i] = table_at(ks.media.albedo_table[m], 0, at)
+            spec[m, SPEC_GLOW, i] = table_at(ks.glow.spectrum, m, at)
+            spec[m, SPEC_GLOW_BLACKBODY, i] = table_at(ks.glow.blackbody, m, at)
 
 
 @jit(inline="always")
@@ -174,6 +181,8 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
         if rho > 0.0 and ks.fluorescence.strength[m] > 0.0:
             dye[0] += rho * ks.fluorescence.excitation_mean[m]
         kelvin = temperature(ks, m, px, py, pz) if ks.temperature.offset[m] >= 0 and rho > 0 else 0.0
+        glowing = ks.glow.glowing[m]
+        normalisation = blackbody_normalisation(ks, kelvin) if glowing and kelvin > 0.0 else 0.0
         for i in range(n):
             if rho <= 0.0:
                 medium_s[m, i] = 0.0
@@ -187,8 +196,12 @@ def _coefficients(ks, px, py, pz, lams, spec, n, c):
             medium_s[m, i] = scattering
             sigma_s[i] += scattering
             sigma_a[i] += absorption
-            if kelvin > 0.0:  # Planck's law is costly: skipped where it is 0
-                emission[i] += thermal_emission(plain_absorption, ks.temperature.map[m, 2], lams[i], kelvin)
+            planck = planck_radiance(lams[i], kelvin) if kelvin > 0.0 else 0.0  # costly: skipped where it is 0
+            if kelvin > 0.0:
+                emission[i] += thermal_emission(plain_absorption, ks.temperature.map[m, 2], planck)
+            if glowing:
+                emission[i] += glow_emission(rho, spec[m, SPEC_GLOW, i], spec[m, SPEC_GLOW_BLACKBODY, i], planck,
+                                             normalisation)
 
 
 # ----------------------------------------------------------------------------- majorant tracking
@@ -644,7 +657,7 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
 
 @jit(inline="always")
 def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, controls, n, path, vertex, tracker, fl):
-    """Delta tracking to the next real event, collecting thermal emission and offering fluorescent sources
+    """Delta tracking to the next real event, collecting emission (thermal, glow) and offering fluorescent sources
     at every tentative collision and weighting null collisions (spectral MIS ratios included). Returns
     (event, collision point, σ̄ there); `vertex` keeps the coefficients at a scattering collision.
 
@@ -907,21 +920,22 @@ PIXEL_CHUNKS = 64
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
-    _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.media, ks.fluorescence, ks.lights,
+    _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.glow, ks.media, ks.fluorescence, ks.lights,
                  ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
                  sum_xyz, sum_sq)
 
 
 @jit(parallel=True, nogil=True)
-def _render_runs(camera, density, majorant, temperature, media, fluorescence, lights, wavelengths, termination, x0, y0,
-                 tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, wavelengths, termination,
+                 x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
     """`render_tile`'s runs of pixels, in parallel. The kernel scene comes as its groups, and each run puts
     them together again: Numba's parallel loop hands a tuple to its threads member by member, which fails
     when a member is a tuple itself."""
     pixels = tile_width * tile_height
     chunks = min(pixels, PIXEL_CHUNKS)
     for chunk in prange(chunks):
-        ks = KernelScene(camera, density, majorant, temperature, media, fluorescence, lights, wavelengths, termination)
+        ks = KernelScene(camera, density, majorant, temperature, glow, media, fluorescence, lights, wavelengths,
+                         termination)
         _render_pixels(ks, x0, y0, tile_width, chunk * pixels // chunks, (chunk + 1) * pixels // chunks, sample_begin,
                        sample_end, seed, band, sum_xyz, sum_sq)
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import INV_FOUR_PI, hg_sample_cos, rayleigh_sample_cos, sample_direction
+from ..planck import planck_radiance
 from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
@@ -99,7 +100,7 @@ def _mean(values):
 
 def _coefficients(ks, points, lams):
     """Medium coefficients at points (rows) for each path wavelength (columns), summed over media;
-    per-medium scattering and fluorescence coefficients (which medium scatters); thermal emission."""
+    per-medium scattering and fluorescence coefficients (which medium scatters); emission (thermal, glow)."""
     count, n = lams.shape
     shape = (count, ks.media.density_scale.shape[0], n)
     out = _Batch(sigma_a=np.zeros((count, n)), sigma_s=np.zeros((count, n)),
@@ -123,9 +124,15 @@ def _coefficients(ks, points, lams):
         out.medium_fl[rows, m] = fluorescence
         out.sigma_s[rows] += scattering
         out.sigma_a[rows] += absorption
+        kelvin, planck = 0.0, 0.0
         if ks.temperature.offset[m] >= 0:
             kelvin = media.temperature(ks, m, *_columns(points[rows]))[:, None]
-            out.emission[rows] += media.thermal_emission(plain_absorption, ks.temperature.map[m, 2], lam, kelvin)
+            planck = planck_radiance(lam, kelvin)
+            out.emission[rows] += media.thermal_emission(plain_absorption, ks.temperature.map[m, 2], planck)
+        if ks.glow.glowing[m]:
+            out.emission[rows] += media.glow_emission(r, table_at(ks.glow.spectrum, m, at),
+                                                      table_at(ks.glow.blackbody, m, at), planck,
+                                                      media.blackbody_normalisation(ks, kelvin))
     return out
 
 
@@ -373,7 +380,7 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
 
 
 def _free_flight(ks, paths, radiance, fl):
-    """Delta tracking of every path to its next real event, collecting thermal emission and offering
+    """Delta tracking of every path to its next real event, collecting emission (thermal, glow) and offering
     fluorescent sources at each tentative collision and weighting null collisions (spectral MIS ratios
     included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls instead of
     putting null-event probabilities into `r_l`, as the Numba kernel's `_free_flight`.
