@@ -110,13 +110,14 @@ def _glows(owner: str, parts, fields, notes) -> dict:
     for part in parts:
         found = glows.get(part.grid)
         temperature = fields.grid(part.temperature_grid) if part.temperature_grid else None
-        glow = Glow(spectrum=Spectrum(part.spectrum), blackbody=part.blackbody, tint=Spectrum(part.tint),
+        blackbody = part.blackbody if temperature is not None or part.temperature > 0 else 0.0  # 0 K: dark
+        glow = Glow(spectrum=Spectrum(part.spectrum), blackbody=blackbody, tint=Spectrum(part.tint),
                     temperature=temperature, temperature_scale=part.temperature if temperature else 1.0,
                     temperature_offset=0.0 if temperature else part.temperature)
         if found is not None:
-            if part.blackbody > 0 and found.blackbody > 0:
+            if glow.blackbody > 0 and found.blackbody > 0:
                 notes.add(f"{owner}: only one black body per volume is rendered (the first)")
-            keep = found if found.blackbody > 0 or part.blackbody == 0 else glow
+            keep = found if found.blackbody > 0 or glow.blackbody == 0 else glow
             glow = Glow(spectrum=Spectrum(found.spectrum.values + part.spectrum), blackbody=keep.blackbody,
                         tint=keep.tint, temperature=keep.temperature, temperature_scale=keep.temperature_scale,
                         temperature_offset=keep.temperature_offset)

@@ -214,3 +214,38 @@ def test_vdb_volume_with_a_principled_volume_matches_cycles(registered, tmp_path
     print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
     assert warnings == []
     assert delta_e < GREY_DELTA_E and z < NOISE_BOUND and cycled.mean() > 0.01
+
+
+def test_principled_volume_emission_matches_cycles(factory, tmp_path):
+    """Emission Color × Strength inside the cube, not scaled by the density (Cycles' meaning), seen through
+    a grey scattering medium and lighting it."""
+    volume_shader(_cube_material(), Color=(0.5, 0.5, 0.5), Density=1.0,
+                  **{"Emission Color": (0.2, 0.9, 0.3), "Emission Strength": 0.5})
+    delta_e, z, traced, cycled, _warnings = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
+    assert delta_e < GREY_DELTA_E and z < NOISE_BOUND
+
+
+def test_emission_shader_alone_glows_as_in_cycles(factory, tmp_path):
+    """An Emission shader as the cube's only volume closure: a medium that emits and does not absorb."""
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    volume_shader(_cube_material(), "ShaderNodeEmission", Color=(1.0, 0.5, 0.2), Strength=0.3)
+    delta_e, z, traced, cycled, _warnings = compare(factory, tmp_path, tracer_spp=64, cycles_spp=16)
+    print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
+    assert delta_e < GREY_DELTA_E and z < NOISE_BOUND
+
+
+@pytest.mark.parametrize("kelvin", [1500.0, 4000.0])
+def test_principled_blackbody_at_a_constant_temperature_matches_cycles(factory, tmp_path, kelvin):
+    """Blackbody Intensity 1 at a constant Temperature on a mesh (no grid): Cycles' σT⁴/π × 1e-6 of the
+    black body's colour. The colour is Planck's spectrum here and Cycles' fitted RGB there: ΔE00 below 1."""
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    volume_shader(_cube_material(), Color=(0.5, 0.5, 0.5), Density=0.5,
+                  **{"Blackbody Intensity": 1.0, "Temperature": kelvin})
+    delta_e, z, traced, cycled, _warnings = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(f"ΔE00 {delta_e:.3f}, blocks within {z:.2f} σ, tracer {traced}, Cycles {cycled}")
+    assert delta_e < 1.0
+    luminance = np.array([0.2126, 0.7152, 0.0722])
+    assert np.dot(luminance, traced) == pytest.approx(np.dot(luminance, cycled), rel=0.03)
