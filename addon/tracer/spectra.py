@@ -279,13 +279,15 @@ def _from_rgb(rgb: tuple[float, float, float], method: str) -> Spectrum:
 
 
 def scaled_from_rgb(rgb, method: str = "jakob2019") -> Spectrum:
-    """A smooth spectrum for any non-negative RGB (linear Rec.709), not only a reflectance: the
-    reflectance of `rgb` divided by its largest component, times that component (0 for black). Cycles'
-    colours and coefficients may exceed 1 (Volume Coefficients, emission colours)."""
+    """A smooth spectrum for any non-negative RGB (linear Rec.709), not only a reflectance: 0 for black,
+    `from_rgb` of it when its components are at most 1, else the reflectance of `rgb` divided by its largest component,
+    times that component. Cycles' colours and coefficients may exceed 1 (Volume Coefficients, emission)."""
     values = np.maximum(np.asarray(_finite_triple(rgb), dtype=np.float64), 0.0)
     peak = float(values.max())
     if peak == 0.0:
-        return constant(0.0)
+        return constant(0.0)  # black is no light and no scattering, exactly
+    if peak <= 1.0:
+        return from_rgb(values, method)
     return from_rgb(np.minimum(values / peak, 1.0), method) * peak
 
 

@@ -9,6 +9,7 @@ renders with different seeds."""
 
 import math
 from pathlib import Path
+from typing import NamedTuple
 
 import bpy
 import numpy as np
@@ -60,22 +61,37 @@ def tracer_rgb(scene, spp: int):
     return film.xyz @ to_rgb.T, variance, export.warnings
 
 
-def compare(scene, folder: Path, tracer_spp: int, cycles_spp: int, allowance: float = 0.0):
-    """Render both; returns (ΔE00 of the mean colours, the largest block difference in standard
-    deviations, the tracer's and Cycles' mean RGB, export warnings). `allowance`: a relative difference of
-    each block admitted beside the noise (the spectral-versus-RGB difference of coloured media)."""
+class Comparison(NamedTuple):
+    delta_e: float  # CIEDE2000 between the mean colours
+    z: float  # the largest block difference, in standard deviations
+    traced: np.ndarray  # the tracer's mean linear Rec.709
+    cycled: np.ndarray  # Cycles' mean
+    warnings: list
+    white_y: float  # the luminance of the ΔE's white: the tracer's 99th percentile
+
+    def delta_e_of(self, rgb_a, rgb_b) -> float:
+        """CIEDE2000 between two linear Rec.709 colours against this comparison's white."""
+        white = colorimetry.rgb_to_xyz([1.0, 1.0, 1.0]) * self.white_y
+        return float(colorimetry.delta_e_2000(colorimetry.rgb_to_xyz(rgb_a), colorimetry.rgb_to_xyz(rgb_b), white))
+
+    def __str__(self) -> str:
+        return (f"ΔE00 {self.delta_e:.3f}, blocks within {self.z:.2f} σ, tracer {self.traced}, "
+                f"Cycles {self.cycled}")
+
+
+def compare(scene, folder: Path, tracer_spp: int, cycles_spp: int, allowance=0.0) -> Comparison:
+    """Render both and compare. `allowance`: a relative difference of each block (per channel, or one
+    number) admitted beside the noise (the spectral-versus-RGB difference of coloured media)."""
     traced, variance, warnings = tracer_rgb(scene, tracer_spp)
     halves = [cycles_rgb(scene, folder, cycles_spp, seed) for seed in (1, 2)]
     cycled = (halves[0] + halves[1]) / 2
     cycles_variance = blocks((halves[0] - halves[1]) ** 2 / 4)  # of the mean of two, per block of pixels
-    sigma = np.sqrt(blocks(variance) / BLOCK**2 + cycles_variance / BLOCK**2 + (allowance * blocks(traced)) ** 2)
+    sigma = np.sqrt(blocks(variance) / BLOCK**2 + cycles_variance / BLOCK**2
+                    + (np.asarray(allowance) * blocks(traced)) ** 2)
     white_y = max(float(np.percentile(traced @ colorimetry.rgb_to_xyz_matrix()[1], 99)), 1e-6)
     z = np.abs(blocks(cycled) - blocks(traced)) / np.maximum(sigma, 1e-4 * white_y)
-    to_xyz = colorimetry.rgb_to_xyz_matrix()
-    white = colorimetry.rgb_to_xyz([1.0, 1.0, 1.0]) * white_y
-    delta_e = float(colorimetry.delta_e_2000(to_xyz @ cycled.mean(axis=(0, 1)), to_xyz @ traced.mean(axis=(0, 1)),
-                                             white))
-    return delta_e, float(z.max()), traced.mean(axis=(0, 1)), cycled.mean(axis=(0, 1)), warnings
+    result = Comparison(0.0, float(z.max()), traced.mean(axis=(0, 1)), cycled.mean(axis=(0, 1)), warnings, white_y)
+    return result._replace(delta_e=result.delta_e_of(result.cycled, result.traced))
 
 
 def look_at(obj, target=(0.0, 0.0, 0.0)) -> None:
