@@ -25,6 +25,7 @@ tagged (that would re-run their modifiers and simulations): their settings, the 
 voxel size, are read from the original objects.
 """
 
+import re
 from dataclasses import dataclass, field
 
 import bpy
@@ -37,6 +38,7 @@ from .lights import export_light
 from .media import export_medium, materials, shader_media, volume_material
 from .meshes import voxelise
 from ..nodes.notes import Notes
+from ..nodes.surface import emits_light
 from .volume_fields import VolumeFields
 from .volumes import volume_grids
 from .world import export_world
@@ -82,7 +84,8 @@ def _object_media(instance, depsgraph, volume_owners, originals: bool, notes: No
             notes.leave_out("volume without a volume material", obj.name + (f" ({', '.join(names)})" if names else ""),
                             "volumes without a volume material")
         elif obj.data.polygons:
-            notes.leave_out("surface object", obj.name)
+            emissive = any(emits_light(material) for material in materials(obj, depsgraph))
+            notes.leave_out(*(("mesh light", obj.name) if emissive else ("surface object", obj.name)))
         return []
     if obj.type == "MESH" and not is_volume and obj.original in volume_owners and not obj.data.polygons:
         return []  # Geometry Nodes turned the mesh into a volume: only that volume renders
@@ -148,4 +151,19 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
         raise SpectralError("the scene has no lights: add a sun, point or spot light, give the World a colour, "
                             "or make a volume glow" + (f" ({warning})" if warning else ""))
     settings = render_settings(settings_scene)
-    return Export(Scene(camera=camera, media=tuple(media), lights=tuple(lights), settings=settings), warnings)
+    return Export(validated(Scene(camera=camera, media=tuple(media), lights=tuple(lights), settings=settings)),
+                  warnings)
+
+
+def validated(scene: Scene) -> Scene:
+    """`scene`, checked; a problem names the Blender object, light or World, not the exported index
+    (`lights[0].strength: ...` becomes `light 'Sun' strength: ...`)."""
+    try:
+        return scene.validate()
+    except SpectralError as problem:
+        def name(match):
+            kind, index, rest = match.group(1), int(match.group(2)), match.group(3) or ""
+            owner = (scene.lights if kind == "lights" else scene.media)[index]
+            noun = ("World" if owner.kind in ("environment", "sky") else "light") if kind == "lights" else "volume"
+            return f"{noun} {owner.name!r}" + (f" {rest[1:]}" if rest else "")
+        raise SpectralError(re.sub(r"\b(lights|media)\[(\d+)\](\.[\w.\[\]]+)?", name, str(problem))) from None

@@ -307,3 +307,20 @@ def test_coloured_principled_volume_matches_cycles_within_the_spectral_allowance
     print(result, f"| Mitsuba spectral vs RGB: ΔE00 {measured:.3f}, per channel {allowance}")
     assert result.delta_e < 1.5 + measured
     assert result.z < NOISE_BOUND
+
+
+def test_an_emissive_mesh_is_named_as_a_mesh_light_and_errors_name_blender_objects(factory):
+    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.0, 0.0, 3.0))
+    panel = bpy.context.active_object
+    panel.name = "Panel"
+    glowing = bpy.data.materials.new("Glow")
+    volume_shader(glowing, "ShaderNodeEmission", Color=(1.0, 1.0, 1.0), Strength=50.0)  # as a surface:
+    tree = glowing.node_tree
+    output = tree.get_output_node("ALL")
+    tree.links.new(output.inputs["Volume"].links[0].from_socket, output.inputs["Surface"])
+    tree.links.remove(output.inputs["Volume"].links[0])
+    panel.data.materials.append(glowing)
+    assert "1 mesh light (Panel)" in _export().warnings[0]
+    bpy.data.objects["Light"].data.energy = float("inf")
+    with pytest.raises(SpectralError, match=r"^light 'Light' strength: "):
+        _export()
