@@ -65,10 +65,9 @@ def test_an_unwritable_output_is_refused_before_rendering(blend, tmp_path):
 
 
 def test_an_albedo_csv_above_one_is_refused_by_the_scene_rules(registered, tmp_path):
-    """The add-on's CSV albedo was never checked (issue 14): the exported scene now meets Scene.validate
-    before it is rendered or saved."""
+    """The add-on's CSV albedo was never checked (issue 14): the exported scene meets Scene.validate when it is
+    exported, and the problem names the Blender volume (issue 28), not `media[0]`."""
     from addon.export.scene import export_scene
-    from addon.tracer.lowering import compile_scene
     from tests.addon.builders import basic_scene
 
     _scene, cloud = basic_scene(tmp_path)
@@ -76,9 +75,8 @@ def test_an_albedo_csv_above_one_is_refused_by_the_scene_rules(registered, tmp_p
     table.write_text("250,0.5\n550,1.5\n830,0.5\n")
     albedo = cloud.material_slots[0].material.spectral.albedo
     albedo.source, albedo.filepath = "CSV", str(table)
-    exported = export_scene(bpy.context.evaluated_depsgraph_get()).scene
-    with pytest.raises(SpectralError, match=r"media\[0\]\.albedo: albedo must be within \[0, 1\], found 1.5 at 550 nm"):
-        compile_scene(exported)
+    with pytest.raises(SpectralError, match=r"^volume 'Cloud' albedo: albedo must be within \[0, 1\], found 1.5 at 550 nm"):
+        export_scene(bpy.context.evaluated_depsgraph_get())
 
 
 def test_frame_lists_read_as_blenders():
