@@ -13,7 +13,7 @@ import numpy as np
 
 from ..phase import INV_FOUR_PI, sample_direction
 from ..shared_math import shared, shared_inline
-from .layout import LIGHT_ENVIRONMENT, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN
+from .layout import AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN
 from .lookups import table_at
 
 
@@ -31,7 +31,8 @@ def choose_light(pmf, u):
 
 @shared_inline
 def is_delta(ks, light):
-    """Whether the light is a delta light (a sun of no angle, a point, a spot): sampled, never hit."""
+    """Whether the light is a delta light (a sun of no angle, a point, a spot), or an area light, which is
+    treated as one: sampled, never hit (paths do not see its surface, so no MIS weighs its samples)."""
     kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
         return ks.lights.cos[light] >= 1.0
@@ -81,11 +82,28 @@ def infinite_pdf(ks, light, dx, dy, dz):
 
 
 @shared_inline
+def area_point(ks, light, u1, u2):
+    """A point (qx, qy, qz) of an area light for uniforms u1, u2, uniform over its area: over the rectangle,
+    or over the ellipse in polar coordinates (radius √u1 of its half-axes, angle 2π u2)."""
+    if ks.lights.area_shape[light] == AREA_ELLIPSE:
+        radius, angle = np.sqrt(u1), 2.0 * np.pi * u2
+        a, b = radius * np.cos(angle), radius * np.sin(angle)
+    else:
+        a, b = 2.0 * u1 - 1.0, 2.0 * u2 - 1.0
+    centre, span = ks.lights.pos[light], ks.lights.area_span[light]
+    return (centre[0] + a * span[0, 0] + b * span[1, 0], centre[1] + a * span[0, 1] + b * span[1, 1],
+            centre[2] + a * span[0, 2] + b * span[1, 2])
+
+
+@shared_inline
 def sample_light(ks, light, px, py, pz, u1, u2):
     """A direction (wx, wy, wz) from point(s) (px, py, pz) towards the light for uniforms u1, u2: uniform in
-    a finite sun's cone or over the sphere for an environment or a sky. Returns it with its solid-angle pdf
-    (1 for a delta light), the distance to the light (inf for suns and the sphere) and the falloff of a
-    point or spot light: 1/d², times a spot's cone (smoothed over its blend)."""
+    a finite sun's cone or over the sphere for an environment or a sky, towards a point of an area light
+    drawn uniformly over its area (`area_point`). Returns it with its solid-angle pdf (1 for a delta light
+    and an area light), the distance to the light (inf for suns and the sphere) and the falloff of a point
+    or spot light: 1/d², times a spot's cone (smoothed over its blend); of an area light, cos θ / d² with θ
+    the angle from its emitting side's normal (0 behind it): its spectrum is its intensity P/π along the
+    normal, so radiance P/(πA) · cos θ / d² over the pdf 1/A of the point is the estimate."""
     kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
         to_sun = ks.lights.dir[light]
@@ -99,7 +117,10 @@ def sample_light(ks, light, px, py, pz, u1, u2):
         r = np.sqrt(np.maximum(0.0, 1.0 - wz * wz))
         return r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2), wz, INV_FOUR_PI, np.inf, 1.0
     position = ks.lights.pos[light]
-    vx, vy, vz = position[0] - px, position[1] - py, position[2] - pz
+    qx, qy, qz = position[0], position[1], position[2]
+    if kind == LIGHT_AREA:
+        qx, qy, qz = area_point(ks, light, u1, u2)
+    vx, vy, vz = qx - px, qy - py, qz - pz
     distance = np.sqrt(vx * vx + vy * vy + vz * vz)
     wx, wy, wz = vx / distance, vy / distance, vz / distance
     falloff = 1.0 / (distance * distance)
@@ -112,13 +133,17 @@ def sample_light(ks, light, px, py, pz, u1, u2):
             falloff = falloff * (t * t * (3.0 - 2.0 * t))
         else:
             falloff = falloff * (cos_angle >= ks.lights.cos[light])
+    if kind == LIGHT_AREA:
+        normal = ks.lights.dir[light]
+        falloff = falloff * np.maximum(-(wx * normal[0] + wy * normal[1] + wz * normal[2]), 0.0)
     return wx, wy, wz, 1.0, distance, falloff
 
 
 @shared_inline
 def incident_radiance(ks, light, at, wx, wy, wz, falloff):
     """Radiance arriving along a direction that `sample_light` drew, at the wavelengths located by `at`: a
-    delta light's spectrum (irradiance or intensity) times the sample's falloff, else `infinite_radiance`."""
+    delta or area light's spectrum (irradiance or intensity) times the sample's falloff, else
+    `infinite_radiance`."""
     if is_delta(ks, light):
         return table_at(ks.lights.spd, light, at) * falloff
     return infinite_radiance(ks, light, at, wx, wy, wz)
