@@ -125,10 +125,11 @@ def test_documented_example_loads(openvdb, write_scene):
     assert smoke.albedo_table[1][GRID == 600] == pytest.approx(0.9)
     assert smoke.fluorescence.quantum_yield == 0.6
     assert smoke.emission.temperature.name == "temperature" and smoke.emission.temperature_scale == 1500.0
-    sun, sky, spot = scene.lights
+    sun, sky, spot, disk = scene.lights
     assert np.linalg.norm(sun.direction) == pytest.approx(1.0) and sun.angle == pytest.approx(np.radians(0.526))
     assert sky.horizon_spectrum is not None
     assert spot.spot_size == pytest.approx(np.radians(30)) and spot.spot_direction == pytest.approx([0, 0.8, -0.6])
+    assert disk.area_shape == "ellipse" and disk.size_x == disk.size_y == 1.5 and disk.unit == "luminous"
     assert scene.settings.wavelength_sampling == "uv" and scene.settings.spp == 64
 
 
