@@ -9,16 +9,24 @@ within 4 standard errors of the samples' own spread (a correct sampler fails wit
 checks the bound is tight (a biased sampler fails as soon as its bias exceeds it).
 """
 
+import copy
+import dataclasses
+
 import numpy as np
 import pytest
 from numba import njit
 
 from addon.tracer import colorimetry, spectra
+from addon.tracer.errors import SpectralError
 from addon.tracer.kernels.light_sampling import sample_light
 from addon.tracer.lowering import compile_scene
+from addon.tracer.render import render
 from addon.tracer.scene import Light
+from addon.tracer.scene_io import load_scene
 from addon.tracer.wavelengths import GRID
 from tests.support import scenes as s
+from tests.tracer.test_fuzz import JUNK
+from tests.tracer.test_scene_io import leaf_paths, set_path
 
 N = 100_000
 SIGMAS = 4.0
@@ -191,3 +199,34 @@ def test_chosen_as_often_as_a_point_light_of_the_same_power():
                   position=CENTRE)
     ks = _compiled(area_light("rectangle", 0.5, 0.5), point, area_light("ellipse", 0.5, 0.5, axes=-AXES))
     assert ks.lights.pmf == pytest.approx([1 / 3] * 3, rel=1e-12)
+
+
+# Emits along (0, −1, −1) / √2, at the tiny scene's medium.
+AREA_LIGHT_JSON = {"kind": "area", "spectrum": 1.0, "position": [0, 2, 2], "size_x": 1.0, "size_y": 0.5,
+                   "area_axes": [[1, 0, 0], [0, 1, 1], [0, -1, 1]], "strength": 30}
+
+
+# A light 1e300 away overflows its selection power's distance (as a point light's does): its pmf is NaN, which
+# the kernels never count (the pixels stay finite, which is what this test checks).
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning", "ignore:invalid value:RuntimeWarning")
+@pytest.mark.parametrize("shape", ["rectangle", "ellipse"])
+def test_any_value_in_an_area_light_loads_or_is_refused_and_renders_without_nan(write_scene, scene_data, shape):
+    """Every field of an area light (facing the tiny scene's medium) replaced in turn by each of the fuzzer's
+    junk values: the scene is refused with a SpectralError, or it renders (NumPy backend, 4 × 3 pixels,
+    1 sample) finite pixels."""
+    light = {**AREA_LIGHT_JSON, "area_shape": shape}
+    rendered = 0
+    for path in leaf_paths(light):
+        for junk in JUNK:
+            data = copy.deepcopy(scene_data)
+            data["lights"] = [copy.deepcopy(light)]
+            set_path(data["lights"][0], path, copy.deepcopy(junk))
+            try:
+                scene = load_scene(write_scene(data))
+            except SpectralError:
+                continue
+            camera = dataclasses.replace(scene.camera, width=4, height=3)
+            film = render(dataclasses.replace(scene, camera=camera), spp=1, backend="numpy").film
+            assert np.all(np.isfinite(film.xyz)), f"{path} = {junk!r}"
+            rendered += 1
+    assert rendered > 20

@@ -49,8 +49,6 @@ def rich_scene_dict() -> dict:
         {"kind": "spot", "spectrum": 1.0, "position": [0, -3, 2], "spot_direction": [0, 0.6, -0.8], "strength": 20},
         {"kind": "point", "spectrum": {"type": "constant", "value": 1}, "position": [1, 1, 2], "strength": 5},
         {"kind": "environment", "spectrum": 0.2},
-        {"kind": "area", "spectrum": 1.0, "position": [0, 2, 2], "area_axes": [[1, 0, 0], [0, 1, 1], [0, -1, 1]],
-         "area_shape": "ellipse", "size_x": 1.0, "size_y": 0.5, "strength": 30},
     ]
     data["render"] = {"spp": 2, "seed": 3, "wavelength_sampling": "uv", "bands": 2, "wavelengths_per_path": 4}
     return data
