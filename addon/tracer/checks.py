@@ -102,6 +102,13 @@ def vector(value, where: str) -> np.ndarray:
     return np.array([number(c, f"{where}[{i}]") for i, c in enumerate(value)])
 
 
+def matrix3(value, where: str) -> np.ndarray:
+    """A 3 × 3 matrix (a list of 3 rows of 3 finite numbers) as a float64 array."""
+    if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 3:
+        raise SpectralError(f"{where}: expected a 3 × 3 matrix (a list of 3 rows), found {shown(value)}")
+    return np.array([vector(row, f"{where}[{index}]") for index, row in enumerate(value)])
+
+
 def direction(value, where: str) -> np.ndarray:
     """A 3-vector of non-zero length (not normalised)."""
     result = vector(value, where)

@@ -1,5 +1,6 @@
-"""Light policies: what a light's `strength` means in its unit (`strength_scale`), and how often next-event
-estimation chooses each light (`selection_powers`, which the lowering normalises to `KernelScene.lights.pmf`).
+"""Light policies: what a light's `strength` means in its unit (`strength_scale`) and the spectrum the kernels
+take for it (`kernel_spectrum`), and how often next-event estimation chooses each light (`selection_powers`,
+which the lowering normalises to `KernelScene.lights.pmf`).
 """
 
 import numpy as np
@@ -25,6 +26,16 @@ def strength_scale(light: Light, spectrum: Spectrum | None = None, cmf: str = "c
     return light.strength / total
 
 
+def kernel_spectrum(light: Light, spectrum: Spectrum | None = None, cmf: str = "cie1931") -> np.ndarray:
+    """The radiometric spectrum on the grid that the kernels take for a light (`KernelLights.spd`): its shape
+    (default: `light.spectrum`) scaled to its strength (`strength_scale`), and for an area light, whose
+    strength is its power P, divided by π: a Lambertian emitter's intensity along its normal, P/π (its
+    radiance P/(π · area) times its area), which its samples' falloff cos θ / d² turns into irradiance."""
+    spectrum = spectrum or light.spectrum
+    values = spectrum.values * strength_scale(light, spectrum, cmf)
+    return values / np.pi if light.kind == "area" else values
+
+
 def proxy_luminance(spd: np.ndarray, cmf: str) -> float:
     """The light-choice proxy of a radiometric spectrum: its luminance Y, or, where more, that of an
     equal-energy spectrum of the same radiant integral (so a light with no visible part, a UV lamp
@@ -48,9 +59,10 @@ def _scene_centre_and_radius(media: tuple[Medium, ...]) -> tuple[np.ndarray, flo
 
 
 def selection_powers(lights: tuple[Light, ...], spds: np.ndarray, media: tuple[Medium, ...], cmf: str) -> np.ndarray:
-    """The power each light is chosen in proportion to, from its radiometric spectrum `spds[i]`: the proxy
-    luminance for a sun, π times it for an environment or sky, and 4π times it over the squared distance
-    to the media's centre (at least their bounding radius) for a point or spot light."""
+    """The power each light is chosen in proportion to, from its kernel spectrum `spds[i]` (`kernel_spectrum`):
+    the proxy luminance for a sun, π times it for an environment or sky, and over the squared distance to
+    the media's centre (at least their bounding radius) the light's power: 4π times it for a point or spot
+    light, π times it for an area light (whichever side of it the media lie on: they may reach around it)."""
     centre, radius = _scene_centre_and_radius(media)
     power = np.zeros(len(lights))
     for index, (light, spd) in enumerate(zip(lights, spds)):
@@ -61,5 +73,6 @@ def selection_powers(lights: tuple[Light, ...], spds: np.ndarray, media: tuple[M
             power[index] = np.pi * luminance
         else:
             distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
-            power[index] = 4.0 * np.pi * luminance / distance**2
+            solid_angle = np.pi if light.kind == "area" else 4.0 * np.pi
+            power[index] = solid_angle * luminance / distance**2
     return power

@@ -12,6 +12,7 @@ from . import colorimetry, sampling
 from .errors import SpectralError
 from .glow import normalisation_table
 from .kernels.layout import (
+    AREA_SHAPES,
     CAMERA_KINDS,
     LIGHT_KINDS,
     PHASES,
@@ -28,7 +29,7 @@ from .kernels.layout import (
     KernelWavelengths,
 )
 from .kernels.media import attenuation
-from .lights import selection_powers, strength_scale
+from .lights import kernel_spectrum, selection_powers
 from .majorant import block_size_for, glow_floor, majorant_grid, minorant_grid
 from .scene import Grid, Light, Medium, Scene
 from .wavelength_modes import default_band, with_band
@@ -167,13 +168,14 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
     count = len(lights)
     out = {
         "kind": np.array([LIGHT_KINDS.index(light.kind) for light in lights], dtype=np.int64),
-        "spd": np.array([light.spectrum.values * strength_scale(light, cmf=cmf) for light in lights]).reshape(
-            count, GRID.size),
+        "spd": np.array([kernel_spectrum(light, cmf=cmf) for light in lights]).reshape(count, GRID.size),
         "spd_horizon": np.zeros((count, GRID.size)),
         "dir": np.zeros((count, 3)),
         "pos": np.zeros((count, 3)),
         "cos": np.ones(count),
         "smooth": np.zeros(count),
+        "area_span": np.zeros((count, 2, 3)),
+        "area_shape": np.zeros(count, dtype=np.int64),
     }
     for index, light in enumerate(lights):
         if light.kind == "sun":
@@ -181,8 +183,8 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
             out["cos"][index] = np.cos(0.5 * light.angle)
         elif light.kind == "sky":
             horizon = light.horizon_spectrum or light.spectrum
-            out["spd_horizon"][index] = horizon.values * strength_scale(light, horizon, cmf)
-        elif light.kind in ("point", "spot"):
+            out["spd_horizon"][index] = kernel_spectrum(light, horizon, cmf)
+        elif light.kind in ("point", "spot", "area"):
             out["pos"][index] = light.position
             if light.kind == "spot":
                 axis = np.asarray(light.spot_direction, dtype=np.float64)
@@ -190,6 +192,12 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
                 cos_half = np.cos(0.5 * light.spot_size)
                 out["cos"][index] = cos_half
                 out["smooth"][index] = (1.0 - cos_half) * light.spot_blend
+            if light.kind == "area":
+                axes = np.asarray(light.area_axes, dtype=np.float64)
+                axes = axes / np.linalg.norm(axes, axis=0)
+                out["dir"][index] = -axes[:, 2]
+                out["area_span"][index] = 0.5 * np.array([light.size_x * axes[:, 0], light.size_y * axes[:, 1]])
+                out["area_shape"][index] = AREA_SHAPES.index(light.area_shape)
     power = selection_powers(lights, out["spd"], media, cmf)
     out["pmf"] = power / power.sum() if count else power
     out["power"] = power

@@ -20,7 +20,7 @@ from . import checks
 from . import colorimetry
 from .colorimetry import CMF_NAMES as CMFS
 from .errors import SpectralError
-from .kernels.layout import CAMERA_KINDS, LIGHT_KINDS, PHASES, WAVELENGTHS_PER_PATH
+from .kernels.layout import AREA_SHAPES, CAMERA_KINDS, LIGHT_KINDS, PHASES, WAVELENGTHS_PER_PATH
 from .phase import HG_G_LIMIT
 from .spectra import Spectrum, constant
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
@@ -31,7 +31,10 @@ SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 LIGHT_UNITS = ("luminous", "radiant")
 # The radiant unit of each light kind's strength.
 RADIANT_UNITS = {"sun": "W·m⁻²", "environment": "W·m⁻²·sr⁻¹", "sky": "W·m⁻²·sr⁻¹", "point": "W·sr⁻¹",
-                 "spot": "W·sr⁻¹"}
+                 "spot": "W·sr⁻¹", "area": "W"}
+# An area light's axes (the columns of `Light.area_axes`) may be this far from orthogonal (the cosine of
+# their angle): Blender's float32 matrices are orthogonal to about 1e-7.
+AREA_AXES_ORTHOGONAL_TO = 1e-5
 WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "colour")
 BACKENDS = ("numba", "numpy")
 SEED_MAX = 2**64 - 1  # seeds are unsigned 64-bit integers in the kernels' random streams
@@ -125,20 +128,32 @@ class Medium:
 class Light:
     """One light. `spectrum` is a shape; `strength` sets its size in `unit` (LIGHT_UNITS): "luminous",
     the luminance Y of its sun irradiance on a plane facing it, environment radiance, point/spot
-    intensity (per steradian); "radiant", the same quantities in watts over the whole spectrum
-    (RADIANT_UNITS). A sky's zenith colour (`spectrum`) and horizon colour each have that strength,
-    blended linearly by the elevation's sine."""
+    intensity (per steradian), area light power (all it emits); "radiant", the same quantities in watts
+    over the whole spectrum (RADIANT_UNITS). A sky's zenith colour (`spectrum`) and horizon colour each
+    have that strength, blended linearly by the elevation's sine.
 
-    kind: str  # "sun" | "environment" | "sky" | "point" | "spot"
+    An area light is a flat one-sided Lambertian emitter (Blender's area light at Spread 180°): a
+    rectangle of size_x × size_y, or an ellipse of those diameters, centred at `position` in the plane of
+    its local X and Y axes (the columns of `area_axes`, normalised when compiled, so their lengths are
+    ignored), emitting along its local −Z (the third column) with radiance P / (π · area) on that side
+    and none behind, P being its power (`strength`). It is only sampled by next-event estimation: camera
+    rays and scattered rays pass through it unseen (Cycles may show an area light to the camera; this
+    tracer draws none)."""
+
+    kind: str  # "sun" | "environment" | "sky" | "point" | "spot" | "area"
     spectrum: Spectrum
     strength: float = 1.0
     direction: np.ndarray | None = None  # sun: unit vector pointing from the scene towards the sun
     angle: float = 0.0  # sun: angular diameter (radians)
-    position: np.ndarray | None = None  # point/spot
+    position: np.ndarray | None = None  # point/spot; area: its centre
     spot_direction: np.ndarray | None = None  # spot: unit vector the spot points along
     spot_size: float = np.pi / 4  # spot: full cone angle (radians)
     spot_blend: float = 0.15  # spot: Blender's smooth edge fraction
     horizon_spectrum: Spectrum | None = None  # sky: colour at the horizon (zenith colour is `spectrum`)
+    area_axes: np.ndarray | None = None  # area: (3, 3), columns its local X, Y, Z in world space (matrix_world's)
+    area_shape: str = "rectangle"  # area: "rectangle" | "ellipse"
+    size_x: float = 1.0  # area: width along its local X (the ellipse's diameter), in world units
+    size_y: float = 1.0  # area: height along its local Y
     name: str = ""
     unit: str = "luminous"  # "luminous" | "radiant"
 
@@ -208,8 +223,8 @@ class Scene:
         for index, light in enumerate(self.lights):
             _check_light(light, f"lights[{index}]", self.settings.cmf)
         if not self.lights and not any(medium.emits() for medium in self.media):
-            raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point or spot "
-                                "light (or an emitting medium)")
+            raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point, spot or "
+                                "area light (or an emitting medium)")
         if self.lights and not any(light.strength > 0 for light in self.lights):
             raise SpectralError("lights: every light has strength 0, so nothing is lit")
         return self
@@ -352,13 +367,35 @@ def _check_light(light: Light, where: str, cmf: str) -> None:
         checks.within(np.degrees(checks.number(light.angle, f"{where}.angle")), f"{where}.angle", 0.0, 180.0)
     if kind == "sky" and light.horizon_spectrum is not None:
         _check_light_spectrum(light.horizon_spectrum, f"{where}.horizon_spectrum", unit, cmf)
-    if kind in ("point", "spot"):
+    if kind in ("point", "spot", "area"):
         checks.vector(light.position, f"{where}.position")
     if kind == "spot":
         checks.direction(light.spot_direction, f"{where}.spot_direction")
         checks.within(np.degrees(checks.number(light.spot_size, f"{where}.spot_size")), f"{where}.spot_size",
                       0.0, 180.0, closed=False)
         checks.within(checks.number(light.spot_blend, f"{where}.spot_blend"), f"{where}.spot_blend", 0.0, 1.0)
+    if kind == "area":
+        _check_area_axes(light.area_axes, f"{where}.area_axes")
+        checks.one_of(light.area_shape, f"{where}.area_shape", AREA_SHAPES)
+        for key in ("size_x", "size_y"):
+            checks.positive(checks.number(getattr(light, key), f"{where}.{key}"), f"{where}.{key}")
+
+
+def _check_area_axes(axes, where: str) -> None:
+    """Three mutually orthogonal columns (to AREA_AXES_ORTHOGONAL_TO) of finite, non-zero length."""
+    columns = checks.matrix3(axes, where).T
+    with np.errstate(over="ignore"):  # a length beyond float64 is inf, refused below
+        lengths = np.linalg.norm(columns, axis=1)
+    for index, length in enumerate(lengths):
+        if not 0 < length < np.inf:
+            raise SpectralError(f"{where}: its column {index} (local {'XYZ'[index]}) must have a finite, non-zero "
+                                f"length, found {length:g}")
+    unit = columns / lengths[:, None]
+    for first, second in ((0, 1), (0, 2), (1, 2)):
+        cosine = float(unit[first] @ unit[second])
+        if abs(cosine) > AREA_AXES_ORTHOGONAL_TO:
+            raise SpectralError(f"{where}: its columns (local X, Y, Z) must be orthogonal, found local "
+                                f"{'XYZ'[first]} and {'XYZ'[second]} at cosine {cosine:.3g}")
 
 
 def _check_light_spectrum(spectrum: Spectrum, where: str, unit: str, cmf: str) -> None:

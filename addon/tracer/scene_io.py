@@ -48,6 +48,7 @@ _LIGHT_FIELDS = {
     "sky": {"required": (), "optional": ("horizon_spectrum",)},
     "point": {"required": ("position",), "optional": ()},
     "spot": {"required": ("position", "spot_direction"), "optional": ("spot_size", "spot_blend")},
+    "area": {"required": ("position", "area_axes", "size_x", "size_y"), "optional": ("area_shape",)},
 }
 _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettings))}
 
@@ -237,13 +238,18 @@ def _light(value, where: str, folder: Path) -> Light:
         fields["angle"] = float(np.radians(checks.number(data.get("angle", 0.0), f"{where}.angle")))
     if kind == "sky" and "horizon_spectrum" in data:
         fields["horizon_spectrum"] = _spectrum(data["horizon_spectrum"], f"{where}.horizon_spectrum", folder)
-    if kind in ("point", "spot"):
+    if kind in ("point", "spot", "area"):
         fields["position"] = checks.vector(data["position"], f"{where}.position")
     if kind == "spot":
         fields["spot_direction"] = _unit(data["spot_direction"], f"{where}.spot_direction")
         size = data.get("spot_size", np.degrees(Light.spot_size))
         fields["spot_size"] = float(np.radians(checks.number(size, f"{where}.spot_size")))
         fields["spot_blend"] = checks.number(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend")
+    if kind == "area":
+        fields["area_axes"] = checks.matrix3(data["area_axes"], f"{where}.area_axes")
+        fields["area_shape"] = data.get("area_shape", Light.area_shape)
+        for key in ("size_x", "size_y"):
+            fields[key] = checks.number(data[key], f"{where}.{key}")
     return Light(kind=kind, spectrum=_spectrum(data["spectrum"], f"{where}.spectrum", folder),
                  strength=checks.number(data.get("strength", 1.0), f"{where}.strength"), name=data.get("name", ""),
                  unit=data.get("unit", Light.unit), **fields)
@@ -400,12 +406,16 @@ def _light_json(light: Light) -> dict:
         data["angle"] = float(np.degrees(light.angle))
     if light.kind == "sky" and light.horizon_spectrum is not None:
         data["horizon_spectrum"] = _spectrum_json(light.horizon_spectrum)
-    if light.kind in ("point", "spot"):
+    if light.kind in ("point", "spot", "area"):
         data["position"] = _floats(light.position)
     if light.kind == "spot":
         data["spot_direction"] = _floats(light.spot_direction)
         data["spot_size"] = float(np.degrees(light.spot_size))
         data["spot_blend"] = float(light.spot_blend)
+    if light.kind == "area":
+        data["area_axes"] = _floats(light.area_axes)
+        data["area_shape"] = light.area_shape
+        data["size_x"], data["size_y"] = float(light.size_x), float(light.size_y)
     return data
 
 
@@ -485,6 +495,8 @@ def _describe_light(light: Light) -> str:
     text = f"light {light.name or '(unnamed)'!r}: {light.kind}, strength {light.strength:g} {unit}"
     if light.kind == "sun":
         text += f", towards ({', '.join(f'{c:.3g}' for c in light.direction)}), {np.degrees(light.angle):.3g}° wide"
-    if light.kind in ("point", "spot"):
+    if light.kind in ("point", "spot", "area"):
         text += f", at ({', '.join(f'{c:.4g}' for c in light.position)})"
+    if light.kind == "area":
+        text += f", {light.area_shape} {light.size_x:.4g} × {light.size_y:.4g}"
     return text

@@ -56,6 +56,10 @@ def full_scene() -> Scene:
         Light("spot", spectra.gaussian(365, 8), 40.0, position=np.array([0, -3.0, 2]),
               spot_direction=np.array([0.0, 0.6, -0.8]), spot_size=np.radians(25), spot_blend=0.3, name="UV",
               unit="radiant"),
+        Light("area", spectra.gaussian(600, 50), 25.0, position=np.array([0.5, -1.0, 3.0]),
+              area_axes=np.array([[0.0, -2.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 3.0]]), area_shape="ellipse",
+              size_x=0.75, size_y=1.25, name="Softbox", unit="radiant"),
+        Light("area", spectra.constant(1.0), 3.0, position=np.array([0.0, 0.0, -2.0]), area_axes=-np.eye(3)),
     )
     camera = Camera(turn, 32, 24, "orthographic", np.radians(50), 4.5, "VERTICAL", 0.1, -0.05, 1.25)
     settings = RenderSettings(8, 3, 20, 2, "uv", 1, 300.0, 700.0, 4, "wyman3", "numpy")
@@ -140,10 +144,11 @@ def test_documented_example_loads(openvdb, write_scene):
     lamp = scene.media[1].glow
     assert lamp.temperature is None and lamp.temperature_offset == 2700.0 and lamp.blackbody == 1e-6
     assert lamp.spectrum.values[GRID == 610] == pytest.approx(0.2) and np.all(lamp.tint.values == 1.0)
-    sun, sky, spot = scene.lights
+    sun, sky, spot, disk = scene.lights
     assert np.linalg.norm(sun.direction) == pytest.approx(1.0) and sun.angle == pytest.approx(np.radians(0.526))
     assert sky.horizon_spectrum is not None
     assert spot.spot_size == pytest.approx(np.radians(30)) and spot.spot_direction == pytest.approx([0, 0.8, -0.6])
+    assert disk.area_shape == "ellipse" and disk.size_x == disk.size_y == 1.5 and disk.unit == "luminous"
     assert scene.settings.wavelength_sampling == "uv" and scene.settings.spp == 64
 
 
@@ -188,6 +193,8 @@ class _Delete:
 
 
 DELETE = _Delete()
+AREA_LIGHT = {"kind": "area", "spectrum": 1, "position": [0, 0, 2], "area_axes": np.eye(3).tolist(), "size_x": 1,
+              "size_y": 1}
 RED_HOT = {"type": "table", "wavelengths": [500, 550, 600], "values": [0.5, 1.3, 0.5]}
 
 BAD = [
@@ -272,9 +279,9 @@ BAD = [
     ("media[0].density.index_to_world", np.zeros((4, 4)).tolist(), ["media[0].density.index_to_world", "bottom row"]),
     ("media[0].density.grid", 7, ["media[0].density.grid: expected a grid name"]),
     ("media[0].density.scale", 1, ["media[0].density: unknown field 'scale'", "allowed: file, grid, index_to_world"]),
-    ("lights", [], ["the scene has no lights: add a sun, environment, sky, point or spot light"]),
+    ("lights", [], ["the scene has no lights: add a sun, environment, sky, point, spot or area light"]),
     ("lights", DELETE, ["the scene has no lights"]),
-    ("lights[0].kind", "area", ["lights[0].kind", "'area'", "sun, environment, sky, point, spot"]),
+    ("lights[0].kind", "mesh", ["lights[0].kind", "'mesh'", "sun, environment, sky, point, spot, area"]),
     ("lights[0].kind", DELETE, ["lights[0]: a light is an object with a \"kind\""]),
     ("lights[0].position", [0, 0, 1],
      ["lights[0]: unknown field 'position' for sun lights", "allowed: kind, spectrum, direction"]),
@@ -290,6 +297,23 @@ BAD = [
     ("lights[0]", {"kind": "spot", "spectrum": 1, "position": [0, 0, 0], "spot_direction": [0, 0, -1], "spot_blend": 2},
      ["lights[0].spot_blend: must be within [0, 1]"]),
     ("lights[0]", {"kind": "point", "spectrum": 1}, ["lights[0]: missing required field 'position' for point lights"]),
+    ("lights[0]", {**AREA_LIGHT, "size_x": 0}, ["lights[0].size_x: must be positive, found 0"]),
+    ("lights[0]", {**AREA_LIGHT, "size_y": -2}, ["lights[0].size_y: must be positive, found -2"]),
+    ("lights[0]", {**AREA_LIGHT, "size_y": "wide"}, ["lights[0].size_y: expected a finite number, found 'wide'"]),
+    ("lights[0]", {key: value for key, value in AREA_LIGHT.items() if key != "size_x"},
+     ["lights[0]: missing required field 'size_x' for area lights"]),
+    ("lights[0]", {**AREA_LIGHT, "area_shape": "disk"},
+     ["lights[0].area_shape", "'disk'", "allowed: rectangle, ellipse"]),
+    ("lights[0]", {**AREA_LIGHT, "area_axes": [[1, 0, 0], [0, 0, 0], [0, 0, 1]]},
+     ["lights[0].area_axes: its column 1 (local Y) must have a finite, non-zero length, found 0"]),
+    ("lights[0]", {**AREA_LIGHT, "area_axes": [[1e300, 0, 0], [1e300, 0, 0], [0, 0, 1]]},
+     ["lights[0].area_axes: its column 0 (local X) must have a finite, non-zero length, found inf"]),
+    ("lights[0]", {**AREA_LIGHT, "area_axes": [[1, 1, 0], [0, 1, 0], [0, 0, 1]]},
+     ["lights[0].area_axes: its columns (local X, Y, Z) must be orthogonal", "local X and Y at cosine 0.707"]),
+    ("lights[0]", {**AREA_LIGHT, "area_axes": [[1, 0], [0, 1]]}, ["lights[0].area_axes: expected a 3 × 3 matrix"]),
+    ("lights[0]", {**AREA_LIGHT, "area_axes": [[1, 0, 0], [0, 1, "z"], [0, 0, 1]]},
+     ["lights[0].area_axes[1][2]: expected a finite number"]),
+    ("lights[0]", {**AREA_LIGHT, "spot_size": 30}, ["lights[0]: unknown field 'spot_size' for area lights"]),
     ("lights[0]", {"kind": "environment", "spectrum": 1, "direction": [0, 0, 1]},
      ["unknown field 'direction' for environment lights"]),
     ("render.spp", 0, ["render.spp: must be at least 1, found 0"]),
@@ -418,8 +442,13 @@ INVALID_SCENES = {
     "dark lights": (lambda s: dataclasses.replace(s, lights=tuple(dataclasses.replace(light, strength=0.0)
                                                                   for light in s.lights)),
                     "lights: every light has strength 0"),
-    "light kind": (lambda s: dataclasses.replace(s, lights=(dataclasses.replace(s.lights[0], kind="area"),)),
-                   "lights[0].kind: unknown value 'area'"),
+    "light kind": (lambda s: dataclasses.replace(s, lights=(dataclasses.replace(s.lights[0], kind="mesh"),)),
+                   "lights[0].kind: unknown value 'mesh'"),
+    "area size": (lambda s: _area(s, size_x=np.inf), "lights[0].size_x: expected a finite number, found inf"),
+    "area shape": (lambda s: _area(s, area_shape="disk"), "lights[0].area_shape: unknown value 'disk'"),
+    "area axes": (lambda s: _area(s, area_axes=np.ones((3, 3))),
+                  "lights[0].area_axes: its columns (local X, Y, Z) must be orthogonal"),
+    "no area axes": (lambda s: _area(s, area_axes=None), "lights[0].area_axes: expected a 3 × 3 matrix"),
     "zero light": (lambda s: dataclasses.replace(s, lights=(dataclasses.replace(s.lights[0],
                                                                                 spectrum=spectra.constant(0.0)),)),
                    "lights[0].spectrum: the light's spectrum is zero everywhere"),
@@ -437,6 +466,12 @@ INVALID_SCENES = {
 
 def _medium(scene, **changes):
     return dataclasses.replace(scene, media=(dataclasses.replace(scene.media[0], **changes), *scene.media[1:]))
+
+
+def _area(scene, **changes):
+    """The scene lit by its first area light alone, changed."""
+    light = next(light for light in scene.lights if light.kind == "area")
+    return dataclasses.replace(scene, lights=(dataclasses.replace(light, **changes),))
 
 
 def _settings(scene, **changes):

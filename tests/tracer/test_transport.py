@@ -111,22 +111,45 @@ def _optical_depth(grid, sigma, origin, direction, length, steps=400):
     return sigma * _trilinear(grid, origin + t[:, None] * direction).sum() * (length / steps)
 
 
+# An area light at (2, 0, 2) facing the origin (emitting along its local −Z): local X, Y, Z as columns.
+AREA_AXES = np.column_stack([[1.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 1.0]]) / [np.sqrt(2), 1.0, np.sqrt(2)]
+AREA_SIZE = (0.6, 0.4)
+
+
+def _area_beams(x, nodes=(6, 4)):
+    """The area light of power 4π (intensity 4 along its normal) seen from x: its rectangle cut into cells
+    (midpoint rule), each a point light of intensity 4 cos θ / cells, θ from the light's normal."""
+    centre, (a, b) = np.array([2.0, 0.0, 2.0]), AREA_SIZE
+    beams = []
+    for i, j in np.ndindex(*nodes):
+        cell = centre + AREA_AXES @ [a * ((i + 0.5) / nodes[0] - 0.5), b * ((j + 0.5) / nodes[1] - 0.5), 0.0]
+        offset = cell - x
+        cos_light = max(offset @ AREA_AXES[:, 2] / np.linalg.norm(offset), 0.0)
+        beams += _towards(offset, 4.0 * cos_light / (nodes[0] * nodes[1]))
+    return beams
+
+
 SINGLE_SCATTERING_LIGHTS = {
-    # name: (light, function of a point -> (unit direction to the light, irradiance Y, distance))
-    "sun": (s.sun([0.6, 0.0, 0.8]), lambda x: (np.array([0.6, 0.0, 0.8]), 1.0, 3.0)),
+    # name: (light, function of a point -> the beams arriving there: [(unit direction to the light,
+    # irradiance Y, distance), ...])
+    "sun": (s.sun([0.6, 0.0, 0.8]), lambda x: [(np.array([0.6, 0.0, 0.8]), 1.0, 3.0)]),
     # A 3° sun: NEE over its cone and phase-sampled rays hitting it are combined by MIS.
-    "sun-3-degrees": (s.sun([0.6, 0.0, 0.8], angle=np.radians(3.0)), lambda x: (np.array([0.6, 0.0, 0.8]), 1.0, 3.0)),
+    "sun-3-degrees": (s.sun([0.6, 0.0, 0.8], angle=np.radians(3.0)),
+                      lambda x: [(np.array([0.6, 0.0, 0.8]), 1.0, 3.0)]),
     "point": (Light(kind="point", spectrum=spectra.constant(1.0), strength=4.0, position=np.array([2.0, 0.0, 2.0])),
               lambda x: _towards(np.array([2.0, 0.0, 2.0]) - x, 4.0)),
     "spot": (Light(kind="spot", spectrum=spectra.constant(1.0), strength=4.0, position=np.array([2.0, 0.0, 2.0]),
                    spot_direction=np.array([-1.0, 0.0, -1.0]) / np.sqrt(2), spot_size=np.radians(60), spot_blend=0.1),
              lambda x: _towards(np.array([2.0, 0.0, 2.0]) - x, 4.0)),
+    "area": (Light(kind="area", spectrum=spectra.constant(1.0), strength=4.0 * np.pi,
+                   position=np.array([2.0, 0.0, 2.0]), area_axes=AREA_AXES, size_x=AREA_SIZE[0], size_y=AREA_SIZE[1]),
+             _area_beams),
 }
 
 
 def _towards(offset, intensity):
     distance = np.linalg.norm(offset)
-    return offset / distance, intensity / distance**2, distance
+    return [(offset / distance, intensity / distance**2, distance)]
 
 
 SINGLE_SCATTERING_MEDIA = {
@@ -140,7 +163,7 @@ SINGLE_SCATTERING_MEDIA = {
 
 
 @pytest.mark.parametrize("light_name, medium_name", [(light, "thin-box") for light in SINGLE_SCATTERING_LIGHTS]
-                         + [(light, "gaussian-ball") for light in ("sun", "sun-3-degrees", "point")])
+                         + [(light, "gaussian-ball") for light in ("sun", "sun-3-degrees", "point", "area")])
 def test_single_scattering_matches_quadrature(light_name, medium_name):
     """A lit medium seen from above, single scattering only (max depth 1): the pixel radiance is
     ∫ T_cam σ_s p_HG(θ) E T_light dt, evaluated here by quadrature on the same density field."""
@@ -160,14 +183,14 @@ def test_single_scattering_matches_quadrature(light_name, medium_name):
         density = _trilinear(box, point[None])[0]
         if density == 0.0:
             continue
-        to_light, irradiance, distance = incident(point)
-        # Light travels along −to_light and leaves towards the camera along −direction.
-        cos_theta = float(to_light @ direction)
-        hg = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * cos_theta) ** 1.5)
         camera_depth = _optical_depth(box, sigma, np.array([0.0, 0.0, 6.0]), direction, t)
-        light_depth = _optical_depth(box, sigma, point, to_light, distance)
-        radiance += (np.exp(-camera_depth) * sigma * albedo * density * hg * irradiance * np.exp(-light_depth)
-                     * (2.0 / steps))
+        for to_light, irradiance, distance in incident(point):
+            # Light travels along −to_light and leaves towards the camera along −direction.
+            cos_theta = float(to_light @ direction)
+            hg = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * cos_theta) ** 1.5)
+            light_depth = _optical_depth(box, sigma, point, to_light, distance)
+            radiance += (np.exp(-camera_depth) * sigma * albedo * density * hg * irradiance * np.exp(-light_depth)
+                         * (2.0 / steps))
     expected = radiance * xyz_of(np.ones(GRID.size))[1]
     assert_within(film, expected)
 

@@ -14,7 +14,8 @@ import numpy as np
 
 CAMERA_KINDS = ("perspective", "orthographic")
 PHASES = ("hg", "rayleigh")
-LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot")
+LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot", "area")
+AREA_SHAPES = ("rectangle", "ellipse")  # an area light's shape (a square and a disk are their equal-sided cases)
 WAVELENGTHS_PER_PATH = (1, 4)  # the hero alone, or the hero and 3 rotated wavelengths (spectral MIS)
 
 CAMERA_PERSPECTIVE = CAMERA_KINDS.index("perspective")
@@ -23,6 +24,8 @@ LIGHT_SUN = LIGHT_KINDS.index("sun")
 LIGHT_ENVIRONMENT = LIGHT_KINDS.index("environment")
 LIGHT_SKY = LIGHT_KINDS.index("sky")
 LIGHT_SPOT = LIGHT_KINDS.index("spot")
+LIGHT_AREA = LIGHT_KINDS.index("area")
+AREA_ELLIPSE = AREA_SHAPES.index("ellipse")
 MAX_WAVELENGTHS_PER_PATH = max(WAVELENGTHS_PER_PATH)
 # Shadow rays whose every transmittance is below this play Russian roulette, stopping with this probability.
 SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
@@ -112,10 +115,13 @@ class KernelLights(NamedTuple):
     """The lights (NL): their kind, spectra and geometry, and how next-event estimation selects them."""
 
     kind: np.ndarray
-    spd: np.ndarray  # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky), intensity (point/spot)
+    # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky), intensity (point/spot; area: along its normal)
+    spd: np.ndarray
     spd_horizon: np.ndarray  # (NL, GRID) sky only
-    dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots
-    pos: np.ndarray  # (NL, 3)
+    dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots; the direction an area light emits along
+    pos: np.ndarray  # (NL, 3) point, spot; the centre of an area light
+    area_span: np.ndarray  # (NL, 2, 3) half its size along its local X and Y, as world vectors
+    area_shape: np.ndarray  # (NL,) its index in AREA_SHAPES
     cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
     smooth: np.ndarray  # (NL,) spot edge width in cosine
     pmf: np.ndarray  # (NL,) selection probability for next-event estimation

@@ -12,9 +12,14 @@ They branch on a light's own parameters, never on a path's values. Part of the k
 import numpy as np
 
 from ..phase import INV_FOUR_PI, sample_direction
-from ..shared_math import shared, shared_inline
-from .layout import LIGHT_ENVIRONMENT, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN
+from ..shared_math import select, shared, shared_inline
+from .layout import AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN
 from .lookups import table_at
+
+# The solid angles within which a rectangle light is sampled by solid angle (pbrt-v4's bounds): a smaller one
+# is the sum of four angles less 2π, lost to rounding; a larger one, close to the light, loses precision too.
+SOLID_ANGLE_SAMPLED = (3e-4, 6.22)
+ONE_BELOW = np.nextafter(1.0, 0.0)  # the largest float64 below 1
 
 
 @shared
@@ -31,7 +36,8 @@ def choose_light(pmf, u):
 
 @shared_inline
 def is_delta(ks, light):
-    """Whether the light is a delta light (a sun of no angle, a point, a spot): sampled, never hit."""
+    """Whether the light is a delta light (a sun of no angle, a point, a spot), or an area light, which is
+    treated as one: sampled, never hit (paths do not see its surface, so no MIS weighs its samples)."""
     kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
         return ks.lights.cos[light] >= 1.0
@@ -81,11 +87,88 @@ def infinite_pdf(ks, light, dx, dy, dz):
 
 
 @shared_inline
+def uniform_area_point(ks, light, u1, u2):
+    """A point (qx, qy, qz) of an area light for uniforms u1, u2, uniform over its area: over the rectangle,
+    or over the ellipse in polar coordinates (radius √u1 of its half-axes, angle 2π u2)."""
+    if ks.lights.area_shape[light] == AREA_ELLIPSE:
+        radius, angle = np.sqrt(u1), 2.0 * np.pi * u2
+        a, b = radius * np.cos(angle), radius * np.sin(angle)
+    else:
+        a, b = 2.0 * u1 - 1.0, 2.0 * u2 - 1.0
+    centre, span = ks.lights.pos[light], ks.lights.area_span[light]
+    return (centre[0] + a * span[0, 0] + b * span[1, 0], centre[1] + a * span[0, 1] + b * span[1, 1],
+            centre[2] + a * span[0, 2] + b * span[1, 2])
+
+
+@shared_inline
+def _angle(cosine):
+    """The angle of a cosine, clamped to [−1, 1] against rounding."""
+    return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
+
+
+@shared_inline
+def spherical_rectangle_point(ks, light, px, py, pz, u1, u2):
+    """A point (qx, qy, qz) of a rectangle light drawn uniformly in the solid angle it subtends from point(s)
+    (px, py, pz) for uniforms u1, u2, and that solid angle (Ureña, Fajardo and King 2013, "An area-preserving
+    parametrization for spherical rectangles", as pbrt-v4 writes it). In the rectangle's frame (its unit
+    axes ex, ey and ez = ex × ey, origin at p) its corners are (x0 or x1, y0 or y1, z), and the algorithm
+    works with z0 = −|z|."""
+    span, centre = ks.lights.area_span[light], ks.lights.pos[light]
+    half_x = np.sqrt(span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
+    half_y = np.sqrt(span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2])
+    exx, exy, exz = span[0, 0] / half_x, span[0, 1] / half_x, span[0, 2] / half_x
+    eyx, eyy, eyz = span[1, 0] / half_y, span[1, 1] / half_y, span[1, 2] / half_y
+    ezx, ezy, ezz = exy * eyz - exz * eyy, exz * eyx - exx * eyz, exx * eyy - exy * eyx
+    cx = centre[0] - span[0, 0] - span[1, 0] - px
+    cy = centre[1] - span[0, 1] - span[1, 1] - py
+    cz = centre[2] - span[0, 2] - span[1, 2] - pz
+    x0, y0, z = cx * exx + cy * exy + cz * exz, cx * eyx + cy * eyy + cz * eyz, cx * ezx + cy * ezy + cz * ezz
+    x1, y1, z0 = x0 + 2.0 * half_x, y0 + 2.0 * half_y, -np.abs(z)
+    # The z components of the normals of the planes through p and each edge (the others cancel in the
+    # products), and the rectangle's angles on the sphere between consecutive planes.
+    n0z, n1z = -y0 / np.sqrt(z0 * z0 + y0 * y0), x1 / np.sqrt(z0 * z0 + x1 * x1)
+    n2z, n3z = y1 / np.sqrt(z0 * z0 + y1 * y1), -x0 / np.sqrt(z0 * z0 + x0 * x0)
+    g0, g1, g2, g3 = _angle(-n0z * n1z), _angle(-n1z * n2z), _angle(-n2z * n3z), _angle(-n3z * n0z)
+    solid_angle = g0 + g1 + g2 + g3 - 2.0 * np.pi
+    # x: invert the solid angle's cdf along the rectangle's x edge.
+    au = u1 * solid_angle + (2.0 * np.pi - g2 - g3)
+    fu = (np.cos(au) * n0z - n2z) / np.sin(au)
+    cu = np.minimum(np.maximum(np.copysign(1.0 / np.sqrt(fu * fu + n0z * n0z), fu), -ONE_BELOW), ONE_BELOW)
+    xu = np.minimum(np.maximum(-cu * z0 / np.sqrt(1.0 - cu * cu), x0), x1)
+    # y: uniform in the sine of the elevation along the column at xu.
+    d = np.sqrt(xu * xu + z0 * z0)
+    h0, h1 = y0 / np.sqrt(d * d + y0 * y0), y1 / np.sqrt(d * d + y1 * y1)
+    hv = h0 + u2 * (h1 - h0)
+    yv = np.minimum(np.maximum(hv * d / np.sqrt(np.maximum(1.0 - hv * hv, 0.0)), y0), y1)
+    return (px + xu * exx + yv * eyx + z * ezx, py + xu * exy + yv * eyy + z * ezy,
+            pz + xu * exz + yv * eyz + z * ezz, solid_angle)
+
+
+@shared_inline
+def area_point(ks, light, px, py, pz, u1, u2):
+    """A point (qx, qy, qz) of an area light seen from point(s) (px, py, pz), drawn for uniforms u1, u2, with
+    the solid angle it was drawn uniformly in (`spherical_rectangle_point`: a rectangle subtending a solid
+    angle within SOLID_ANGLE_SAMPLED), or 0 where it was drawn uniformly over the area (`uniform_area_point`:
+    an ellipse, and a rectangle outside those bounds)."""
+    qx, qy, qz = uniform_area_point(ks, light, u1, u2)
+    if ks.lights.area_shape[light] == AREA_ELLIPSE:
+        return qx, qy, qz, 0.0 * u1
+    sx, sy, sz, solid_angle = spherical_rectangle_point(ks, light, px, py, pz, u1, u2)
+    by_solid_angle = (solid_angle >= SOLID_ANGLE_SAMPLED[0]) & (solid_angle <= SOLID_ANGLE_SAMPLED[1])
+    return (select(by_solid_angle, sx, qx), select(by_solid_angle, sy, qy), select(by_solid_angle, sz, qz),
+            select(by_solid_angle, solid_angle, 0.0))
+
+
+@shared_inline
 def sample_light(ks, light, px, py, pz, u1, u2):
     """A direction (wx, wy, wz) from point(s) (px, py, pz) towards the light for uniforms u1, u2: uniform in
-    a finite sun's cone or over the sphere for an environment or a sky. Returns it with its solid-angle pdf
-    (1 for a delta light), the distance to the light (inf for suns and the sphere) and the falloff of a
-    point or spot light: 1/d², times a spot's cone (smoothed over its blend)."""
+    a finite sun's cone or over the sphere for an environment or a sky, towards a point of an area light
+    (`area_point`). Returns it with its solid-angle pdf (1 for a delta light and an area light), the distance
+    to the light (inf for suns and the sphere) and the falloff of a point or spot light: 1/d², times a spot's
+    cone (smoothed over its blend). An area light's spectrum is its intensity P/π along its normal, its
+    radiance L = P/(πA) times its area A, so its falloff makes L over the point's pdf the estimate: Ω / A for
+    a point drawn uniformly in the solid angle Ω, cos θ / d² for one drawn with pdf 1/A over the area, θ
+    the angle from the light's emitting normal (both 0 behind the light)."""
     kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
         to_sun = ks.lights.dir[light]
@@ -99,7 +182,10 @@ def sample_light(ks, light, px, py, pz, u1, u2):
         r = np.sqrt(np.maximum(0.0, 1.0 - wz * wz))
         return r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2), wz, INV_FOUR_PI, np.inf, 1.0
     position = ks.lights.pos[light]
-    vx, vy, vz = position[0] - px, position[1] - py, position[2] - pz
+    qx, qy, qz, solid_angle = position[0], position[1], position[2], 0.0
+    if kind == LIGHT_AREA:
+        qx, qy, qz, solid_angle = area_point(ks, light, px, py, pz, u1, u2)
+    vx, vy, vz = qx - px, qy - py, qz - pz
     distance = np.sqrt(vx * vx + vy * vy + vz * vz)
     wx, wy, wz = vx / distance, vy / distance, vz / distance
     falloff = 1.0 / (distance * distance)
@@ -112,13 +198,21 @@ def sample_light(ks, light, px, py, pz, u1, u2):
             falloff = falloff * (t * t * (3.0 - 2.0 * t))
         else:
             falloff = falloff * (cos_angle >= ks.lights.cos[light])
+    if kind == LIGHT_AREA:
+        normal, span = ks.lights.dir[light], ks.lights.area_span[light]
+        cos_light = np.maximum(-(wx * normal[0] + wy * normal[1] + wz * normal[2]), 0.0)
+        rectangle_area = 4.0 * np.sqrt((span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
+                             * (span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2]))
+        falloff = select(solid_angle > 0.0, (cos_light > 0.0) * solid_angle / rectangle_area,
+                         falloff * cos_light)
     return wx, wy, wz, 1.0, distance, falloff
 
 
 @shared_inline
 def incident_radiance(ks, light, at, wx, wy, wz, falloff):
     """Radiance arriving along a direction that `sample_light` drew, at the wavelengths located by `at`: a
-    delta light's spectrum (irradiance or intensity) times the sample's falloff, else `infinite_radiance`."""
+    delta or area light's spectrum (irradiance or intensity) times the sample's falloff, else
+    `infinite_radiance`."""
     if is_delta(ks, light):
         return table_at(ks.lights.spd, light, at) * falloff
     return infinite_radiance(ks, light, at, wx, wy, wz)

@@ -490,11 +490,11 @@ def _is_grey(ks, n, spec):
     GREY_SPREAD). Then the unidirectional strategy's null-event probabilities are the same at every
     wavelength and cancel out of the spectral MIS, so MIS may give both strategies the controls'
     transmittance in their place (docs/algorithm.md, "Lights and next-event estimation")."""
-    area_light = False
+    hit_light = False  # a light that paths may find (not a delta or area light)
     for light in range(ks.lights.kind.shape[0]):
         if not is_delta(ks, light):
-            area_light = True
-    if not area_light:
+            hit_light = True
+    if not hit_light:
         return False
     for m in range(ks.media.density_scale.shape[0]):
         first = attenuation(1.0, spec[m, SPEC_EXTINCTION, 0], spec[m, SPEC_EXCITATION, 0])
