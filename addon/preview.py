@@ -1,11 +1,10 @@
 """Material, light and World previews (the Properties editor's and the asset browser's thumbnails).
 
 Blender renders them with the engine on its own preview scene (a sphere or other shape carrying the
-material, a floor, two area lights and a preview World), exported as any scene. The tracer has no area
-lights, so a preview with no light of its own but the World (a material's) is given a key light: a
-sun from the camera's upper left, so that scattering shows as shading rather than vanishing into the
-uniform World (a white scattering medium in a uniform environment is invisible). A light's preview keeps
-its light. Previews render at the preview scene's Viewport Samples (Blender's preview scene keeps the
+material, a floor, two area lights and a preview World), exported as any scene, so a preview is lit as
+Cycles lights it. A preview with no light of its own but the World is given a key light: a sun from the
+camera's upper left, so that scattering shows as shading rather than vanishing into the uniform World (a
+white scattering medium in a uniform environment is invisible). Previews render at the preview scene's Viewport Samples (Blender's preview scene keeps the
 add-on's default settings, not the user's).
 """
 
@@ -24,7 +23,7 @@ def preview_scene(scene: Scene, samples: int) -> Scene:
     """The exported preview scene as a preview renders it: with a key light if it has none of its own
     but the World, at `samples` per pixel."""
     settings = dataclasses.replace(scene.settings, spp=samples)
-    if any(light.kind in ("sun", "point", "spot") for light in scene.lights):
+    if any(light.kind in ("sun", "point", "spot", "area") for light in scene.lights):
         return dataclasses.replace(scene, settings=settings)
     axes = np.asarray(scene.camera.to_world)[:3, :3]
     direction = axes @ np.asarray(KEY_LIGHT_FROM)

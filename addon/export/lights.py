@@ -5,12 +5,15 @@ Brightness is Blender's own, converted so that the same light looks the same in 
   Blender's sun shines along the object's −Z; our `direction` points towards the sun: the object's +Z.
 - Point and spot: Power P in W radiates P / (4π) W/sr in every direction (Cycles: a spot is a point
   light masked to its cone, it does not concentrate its power), so our intensity is P / (4π) per sr.
-Both are scaled by 2^Exposure. The colour is Blender's: the light's Color (times the black body of its
+- Area (Square, Rectangle, Disk, Ellipse): Power P in W is all it emits from its front (−Z), a
+  Lambertian emitter of radiance P / (π A); the size is Blender's times the object's scale. Spread
+  below 180° renders as 180° (named in the warning).
+All are scaled by 2^Exposure. The colour is Blender's: the light's Color (times the black body of its
 Temperature when that is on, times the Color and Strength of an Emission node in its node tree) as an
 emission spectrum (`tracer.spectra`), in the radiant unit so that the radiance is exactly Cycles' RGB as a
 spectrum. With the light's Spectral Light on, its spectrum replaces the colour instead, in the unit its
 settings choose (luminous: the number is luminance Y; radiant: watts over the whole spectrum, for UV
-lamps). Area lights are not rendered yet (named in the render report).
+lamps).
 """
 
 import math
@@ -23,7 +26,8 @@ from ..tracer.scene import Light
 from ..nodes.graph import Blackbody, colour, number, output_source
 from .world import radiant_light
 
-SUPPORTED = ("SUN", "POINT", "SPOT")
+SUPPORTED = ("SUN", "POINT", "SPOT", "AREA")
+FULL_SPREAD = math.pi - 1e-4  # Blender's Spread of a Lambertian area light (180°), within float rounding
 
 
 def point_intensity(power_watts: float) -> float:
@@ -63,6 +67,19 @@ def light_colour(light, owner: str, notes) -> tuple[spectra.Spectrum, float]:
     return spectrum, factor
 
 
+def _area(light, matrix, name: str, notes) -> dict:
+    """An area light's geometry: its centre, its axes (normalised), its shape and world size (Blender's
+    Size × the object's scale along each axis)."""
+    columns = np.array([matrix.col[index][:3] for index in range(3)], dtype=np.float64)
+    lengths = np.linalg.norm(columns, axis=1)
+    square = light.shape in ("SQUARE", "DISK")
+    if light.spread < FULL_SPREAD:
+        notes.add(f"light {name!r}: Spread {math.degrees(light.spread):.0f}° rendered as 180°")
+    return dict(position=np.array(matrix.translation, dtype=np.float64), area_axes=(columns / lengths[:, None]).T,
+                area_shape="rectangle" if light.shape in ("SQUARE", "RECTANGLE") else "ellipse",
+                size_x=light.size * lengths[0], size_y=(light.size if square else light.size_y) * lengths[1])
+
+
 def export_light(obj, matrix, notes) -> Light | None:
     """The tracer light of an evaluated light object at world `matrix` (its own, or its instance's), or
     None when it gives no light or is not rendered (area lights: named in `notes`)."""
@@ -73,6 +90,8 @@ def export_light(obj, matrix, notes) -> Light | None:
     if light.type == "SUN":
         geometry = dict(direction=_axis(matrix, 2), angle=light.angle)
         strength = light.energy
+    elif light.type == "AREA":
+        geometry, strength = _area(light, matrix, obj.name, notes), light.energy
     else:
         geometry = dict(position=np.array(matrix.translation, dtype=np.float64))
         strength = point_intensity(light.energy)

@@ -6,7 +6,7 @@ from bpy.app.translations import pgettext_iface as iface_
 from .panel import SpectralPanel
 from .spectrum import draw_spectrum
 
-SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT")
+SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT", "AREA")
 
 
 def draw_light(layout, light) -> None:

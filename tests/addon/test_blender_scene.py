@@ -12,7 +12,7 @@ import pytest
 from addon.export.scene import export_scene
 from addon.tracer import colorimetry
 from addon.tracer.errors import SpectralError
-from tests.support.cycles import NOISE_BOUND, compare
+from tests.support.cycles import NOISE_BOUND, compare, look_at
 
 bpy = pytest.importorskip("bpy")
 
@@ -324,3 +324,23 @@ def test_an_emissive_mesh_is_named_as_a_mesh_light_and_errors_name_blender_objec
     bpy.data.objects["Light"].data.energy = float("inf")
     with pytest.raises(SpectralError, match=r"^light 'Light' strength: "):
         _export()
+
+
+@pytest.mark.parametrize("shape, size, size_y, scale", [("SQUARE", 1.0, 1.0, (1.0, 1.0, 1.0)),
+                                                        ("RECTANGLE", 1.5, 0.5, (1.0, 2.0, 1.0)),
+                                                        ("DISK", 1.2, 1.2, (1.0, 1.0, 1.0)),
+                                                        ("ELLIPSE", 0.6, 1.4, (1.5, 1.0, 1.0))])
+def test_area_lights_match_cycles(factory, tmp_path, shape, size, size_y, scale):
+    """An area light (Power in W, its shape, size and the object's scale) as the cube's only light."""
+    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    light = bpy.data.objects["Light"]
+    light.data.type = "AREA"
+    area = light.data
+    area.shape, area.size, area.size_y, area.energy = shape, size, size_y, 300.0
+    light.location, light.scale = (2.0, -1.0, 2.5), scale
+    look_at(light)
+    volume_shader(_cube_material(), Color=(0.8, 0.8, 0.8), Density=1.0, Anisotropy=0.2)
+    result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(result)
+    assert result.warnings == []
+    assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
