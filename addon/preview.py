@@ -4,8 +4,8 @@ Blender renders them with the engine on its own preview scene (a sphere or other
 material, a floor, two area lights and a preview World), exported as any scene, so a preview is lit as
 Cycles lights it. A preview with no light of its own but the World is given a key light: a sun from the
 camera's upper left, so that scattering shows as shading rather than vanishing into the uniform World (a
-white scattering medium in a uniform environment is invisible). Previews render at the preview scene's Viewport Samples (Blender's preview scene keeps the
-add-on's default settings, not the user's).
+white scattering medium in a uniform environment is invisible). Previews render at the preview scene's
+Viewport Samples (Blender's preview scene keeps the add-on's default settings, not the user's).
 """
 
 import dataclasses

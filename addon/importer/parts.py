@@ -115,7 +115,7 @@ def add_sun(collection, light: Light, spectrum, name: str | None = None):
     """A sun object shining from the tracer light's direction; `spectrum(settings)` sets its spectrum."""
     data = bpy.data.lights.new(name or light.name, "SUN")
     data.energy, data.angle = light.strength, light.angle
-    data.spectral.enabled = True
+    data.spectral.enabled, data.spectral.unit = True, light.unit
     spectrum(data.spectral.spectrum)
     obj = link(collection, bpy.data.objects.new(name or light.name, data))
     obj.rotation_euler = _pointing(light.direction)
@@ -129,12 +129,30 @@ def add_point_or_spot(collection, light: Light, name: str | None = None):
     data.energy = light.strength / point_intensity(1.0)
     if light.kind == "spot":
         data.spot_size, data.spot_blend = light.spot_size, light.spot_blend
-    data.spectral.enabled = True
+    data.spectral.enabled, data.spectral.unit = True, light.unit
     set_light_spectrum(data.spectral.spectrum, light.spectrum)
     obj = link(collection, bpy.data.objects.new(name or light.name, data))
     obj.location = Vector(light.position)
     if light.kind == "spot":  # a spot shines along its object's −Z
         obj.rotation_euler = _pointing(-np.asarray(light.spot_direction))
+    return obj
+
+
+def add_area(collection, light: Light, name: str | None = None):
+    """An area light object of the tracer light: its power, shape and size, placed by its centre and axes
+    (Blender's area light shines along its −Z, as the tracer's); its spectrum as a curve."""
+    equal = light.size_x == light.size_y
+    shape = {("rectangle", True): "SQUARE", ("rectangle", False): "RECTANGLE", ("ellipse", True): "DISK",
+             ("ellipse", False): "ELLIPSE"}[(light.area_shape, equal)]
+    data = bpy.data.lights.new(name or light.name, "AREA")
+    data.energy, data.shape, data.size, data.size_y = light.strength, shape, light.size_x, light.size_y
+    data.spectral.enabled, data.spectral.unit = True, light.unit
+    set_light_spectrum(data.spectral.spectrum, light.spectrum)
+    obj = link(collection, bpy.data.objects.new(name or light.name, data))
+    axes = np.asarray(light.area_axes, dtype=np.float64)
+    matrix = np.eye(4)
+    matrix[:3, :3], matrix[:3, 3] = axes / np.linalg.norm(axes, axis=0), light.position
+    obj.matrix_world = Matrix(matrix.tolist())
     return obj
 
 

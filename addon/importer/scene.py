@@ -1,5 +1,5 @@
 """A tracer Scene → a new Blender scene that exports back to it: camera and resolution, render settings,
-media (Volume objects reading VDB files, Spectral Volume materials), sun, point and spot lights, and
+media (Volume objects reading VDB files, Spectral Volume materials), sun, point, spot and area lights, and
 the environment or sky as the World.
 
 Blender's Volume objects read VDB files, so every medium's grids are written to a VDB file in a data
@@ -82,6 +82,8 @@ def _build(scene: Scene, name: str, folder: Path, warnings: list) -> tuple[objec
                 settings, light.spectrum), light.name or "Sun")
         elif light.kind in ("point", "spot"):
             parts.add_point_or_spot(collection, light, light.name or light.kind.title())
+        elif light.kind == "area":
+            parts.add_area(collection, light, light.name or "Area")
     if worlds:
         world = worlds[0]
         blender_scene.world = parts.new_world(world.name or name, world, lambda settings: parts.set_light_spectrum(

@@ -1,8 +1,9 @@
 """What an export could not render as set, gathered into one warning for the render report.
 
 Two kinds of entries: whole things left out, counted and named by kind (`leave_out("surface object",
-"Plane")` twice gives "2 surface objects (Plane, Suzanne)"), and settings rendered otherwise than set ("material 'Fog' ▸ Volume Scatter: phase Mie
-rendered as Henyey–Greenstein (g = 0.3)"). Nothing the exporter does not render is skipped silently.
+name)` for Plane and Suzanne gives "2 surface objects (Plane, Suzanne)"), and settings rendered otherwise
+than set ("material 'Fog' ▸ Volume Scatter: phase Mie rendered as Henyey–Greenstein (g = 0.3)").
+Nothing the exporter does not render is skipped silently.
 """
 
 from dataclasses import dataclass, field

@@ -75,7 +75,8 @@ def test_an_albedo_csv_above_one_is_refused_by_the_scene_rules(registered, tmp_p
     table.write_text("250,0.5\n550,1.5\n830,0.5\n")
     albedo = cloud.material_slots[0].material.spectral.albedo
     albedo.source, albedo.filepath = "CSV", str(table)
-    with pytest.raises(SpectralError, match=r"^volume 'Cloud' albedo: albedo must be within \[0, 1\], found 1.5 at 550 nm"):
+    with pytest.raises(SpectralError,
+                       match=r"^volume 'Cloud' albedo: albedo must be within \[0, 1\], found 1.5 at 550 nm"):
         export_scene(bpy.context.evaluated_depsgraph_get())
 
 

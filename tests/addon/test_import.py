@@ -46,12 +46,22 @@ def _every_feature():
         Light(kind="spot", spectrum=smooth_ramp(0.2, 1.0), strength=7.0, position=np.array([-2.0, 1.0, 2.0]),
               spot_direction=np.array([0.6, -0.3, -0.74]) / np.linalg.norm([0.6, -0.3, -0.74]),
               spot_size=np.radians(50.0), spot_blend=0.3, name="Spot"),
+        Light(kind="area", spectrum=spectra.blackbody(4000.0), strength=60.0, position=np.array([0.5, -1.0, 2.5]),
+              area_axes=_tilted_axes(), area_shape="ellipse", size_x=0.8, size_y=0.5, name="Panel", unit="radiant"),
         Light(kind="sky", spectrum=spectra.blackbody(12000.0), strength=0.4,
               horizon_spectrum=smooth_ramp(1.0, 0.4), name="Sky"),
     ]
     return scene(_rotated_camera(), [fire, dye], lights, spp=7, seed=11, max_depth=9, bands=2,
                  wavelength_sampling="uv", wavelengths_per_path=1, lambda_min=300.0, lambda_max=780.0,
                  cmf="wyman3", backend="numpy")
+
+
+def _tilted_axes():
+    """An orthonormal frame turned 30° about X and 20° about Z (columns: local X, Y, Z)."""
+    a, b = np.radians(30.0), np.radians(20.0)
+    about_x = np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+    about_z = np.array([[np.cos(b), -np.sin(b), 0], [np.sin(b), np.cos(b), 0], [0, 0, 1]])
+    return about_z @ about_x
 
 
 def test_export_of_the_imported_scene_is_the_scene(registered, tmp_path):

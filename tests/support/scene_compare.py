@@ -67,6 +67,10 @@ def assert_same_scene(exported, reference, curve: bool, renamed=None, albedo_tol
             if getattr(b, field) is not None:
                 np.testing.assert_allclose(getattr(a, field), getattr(b, field), atol=1e-5, err_msg=f"{a.name} {field}")
         assert (a.spot_size, a.spot_blend) == pytest.approx((b.spot_size, b.spot_blend), abs=1e-6)
+        assert a.unit == b.unit, a.name
+        if b.kind == "area":
+            assert a.area_shape == b.area_shape and (a.size_x, a.size_y) == pytest.approx((b.size_x, b.size_y))
+            np.testing.assert_allclose(a.area_axes, b.area_axes, atol=1e-6, err_msg=f"{a.name} axes")
         assert (a.horizon_spectrum is None) == (b.horizon_spectrum is None)
         shapes = [(light_shape(a, low), light_shape(b, low))]
         if b.horizon_spectrum is not None:
