@@ -52,13 +52,13 @@ def _background_colour(node, owner: str, notes):
         texture = found[0]
         mean = None if texture.image is None else image_mean_colour(texture.image)
         if mean is None:
-            notes.leave_out("World texture", f"{owner} ▸ {texture.name} (no image)")
+            notes.leave_out("World texture", f"{texture.name} of {owner}, no image")
             return None
         notes.add(f"{owner} ▸ {texture.name}: the HDRI is rendered as a uniform World of its mean colour "
                   f"({', '.join(f'{value:.3g}' for value in mean)})")
         return mean
     if found is not None and found[0].bl_idname == "ShaderNodeTexSky":
-        notes.leave_out("World texture", f"{owner} ▸ {found[0].name} (Sky Texture)")
+        notes.leave_out("World texture", f"{found[0].name} of {owner}")
         return None
     return colour(node, "Color", owner, notes)
 

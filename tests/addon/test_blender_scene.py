@@ -142,6 +142,10 @@ def test_what_is_not_rendered_is_named_in_one_warning(factory):
     bpy.ops.mesh.primitive_plane_add(size=4.0, location=(0.0, 0.0, -1.0))
     area = bpy.data.objects.new("Area", bpy.data.lights.new("Area", "AREA"))
     factory.collection.objects.link(area)
+    area.data.spread = math.radians(90.0)
+    world = factory.world.node_tree
+    sky = world.nodes.new("ShaderNodeTexSky")
+    world.links.new(sky.outputs["Color"], world.nodes["Background"].inputs["Color"])
     fog = volume_shader(_cube_material(), "ShaderNodeVolumeScatter", Color=(0.8, 0.8, 0.8), Density=1.0)
     fog.phase = "MIE"
     texture = _cube_material().node_tree.nodes.new("ShaderNodeTexNoise")
@@ -149,7 +153,8 @@ def test_what_is_not_rendered_is_named_in_one_warning(factory):
     warnings = _export().warnings
     assert len(warnings) == 1
     warning = warnings[0]
-    assert warning.startswith("not rendered: 1 surface object (Plane); 1 area light (Area); ")
+    assert warning.startswith("not rendered: 1 surface object (Plane); 1 World texture (Sky Texture of World 'World'); ")
+    assert "light 'Area': Spread 90° rendered as 180°" in warning
     assert "material 'Material' ▸ Volume Scatter: phase Mie rendered as Henyey–Greenstein" in warning
     assert "material 'Material' ▸ Volume Scatter ▸ Density is driven by 'Noise Texture'" in warning
 
