@@ -349,3 +349,27 @@ def test_area_lights_match_cycles(factory, tmp_path, shape, size, size_y, scale)
     print(result)
     assert result.warnings == []
     assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
+
+
+def test_mix_shader_of_rayleigh_scatter_and_volume_coefficients_matches_cycles(factory, tmp_path):
+    """Mix Shader (Fac 0.3) of a Rayleigh Volume Scatter and a Volume Coefficients closure (grey σ_s 1.2,
+    σ_a 0.3, g 0.5): two media on one grid, as Cycles adds two closures."""
+    material = _cube_material()
+    tree = material.node_tree
+    rayleigh = volume_shader(material, "ShaderNodeVolumeScatter", Color=(0.9, 0.9, 0.9), Density=1.0)
+    rayleigh.phase = "RAYLEIGH"
+    coefficients = tree.nodes.new("ShaderNodeVolumeCoefficients")
+    coefficients.inputs["Scatter Coefficients"].default_value = (1.2, 1.2, 1.2)
+    coefficients.inputs["Absorption Coefficients"].default_value = (0.3, 0.3, 0.3)
+    coefficients.inputs["Emission Coefficients"].default_value = (0.0, 0.0, 0.0)
+    coefficients.inputs["Anisotropy"].default_value = 0.5
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    mix.inputs["Fac"].default_value = 0.3
+    tree.links.new(rayleigh.outputs[0], mix.inputs[1])
+    tree.links.new(coefficients.outputs[0], mix.inputs[2])
+    tree.links.new(mix.outputs[0], tree.get_output_node("ALL").inputs["Volume"])
+    assert sorted(medium.phase for medium in _export().scene.media) == ["hg", "rayleigh"]
+    result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(result)
+    assert result.warnings == []
+    assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
