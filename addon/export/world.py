@@ -29,20 +29,37 @@ def _srgb_to_linear(values: np.ndarray) -> np.ndarray:
     return np.where(values <= 0.04045, values / 12.92, ((values + 0.055) / 1.055) ** 2.4)
 
 
-def image_mean_colour(image) -> tuple[float, float, float] | None:
-    """The mean linear RGB of an equirectangular image over the sphere (rows weighted by the cosine of
-    their latitude), or None when it has no pixels."""
+MAX_MAP_WIDTH = 2048  # wider HDRIs are averaged down (by whole texel blocks) to at most this width
+
+
+def image_rgb(image) -> np.ndarray | None:
+    """An image's linear Rec.709 pixels (height, width, 3), top row first, at most MAX_MAP_WIDTH wide
+    (blocks of texels averaged); None when it has no pixels. 8-bit sRGB images are linearised."""
     width, height = image.size
     if width == 0 or height == 0:
         return None
     pixels = np.empty(width * height * image.channels, dtype=np.float32)
     image.pixels.foreach_get(pixels)
-    rgb = pixels.reshape(height, width, image.channels)[:, :, :3].astype(np.float64)
+    rgb = pixels.reshape(height, width, image.channels)[::-1, :, :3]  # Blender stores the bottom row first
     if not image.is_float and image.colorspace_settings.name == "sRGB":
-        rgb = _srgb_to_linear(rgb)
+        rgb = _srgb_to_linear(rgb.astype(np.float64)).astype(np.float32)
+    step = -(-width // MAX_MAP_WIDTH)
+    if step > 1:
+        rows, columns = height // step * step, width // step * step
+        rgb = rgb[:rows, :columns].reshape(rows // step, step, columns // step, step, 3).mean(axis=(1, 3))
+    return np.ascontiguousarray(np.maximum(rgb, 0.0), dtype=np.float32)
+
+
+def image_mean_colour(image) -> tuple[float, float, float] | None:
+    """The mean linear RGB of an equirectangular image over the sphere (rows weighted by the cosine of
+    their latitude), or None when it has no pixels."""
+    rgb = image_rgb(image)
+    if rgb is None:
+        return None
+    height, width = rgb.shape[:2]
     latitude = (np.arange(height) + 0.5) / height * np.pi - np.pi / 2
     weights = np.cos(latitude)[:, None, None]
-    return tuple((rgb * weights).sum(axis=(0, 1)) / (weights.sum() * width))
+    return tuple((rgb.astype(np.float64) * weights).sum(axis=(0, 1)) / (weights.sum() * width))
 
 
 def _background_colour(node, owner: str, notes):

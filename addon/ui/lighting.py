@@ -10,8 +10,8 @@ SUPPORTED_LIGHTS = ("SUN", "POINT", "SPOT", "AREA")
 
 
 def draw_light(layout, light) -> None:
-    """Brightness, size (the sun's Angle softens its shadows; the tracer's point and spot lights are
-    points, so their Radius is greyed out and says why), then the colour: Blender's Color and
+    """Brightness, size (the sun's Angle softens its shadows; an area light's shape, size and spread; the
+    tracer's point and spot lights are points, so their Radius is greyed out and says why), then the colour: Blender's Color and
     Temperature, or with Spectral Light on, the spectrum and its unit."""
     if light.type not in SUPPORTED_LIGHTS:
         layout.label(text=iface_("{} lights are not rendered yet (sun, point, spot are)").format(
@@ -21,6 +21,14 @@ def draw_light(layout, light) -> None:
     column.prop(light, "energy", text="Strength" if light.type == "SUN" else "Power")
     if light.type == "SUN":
         column.prop(light, "angle")
+    elif light.type == "AREA":
+        column.prop(light, "shape")
+        if light.shape in ("SQUARE", "DISK"):
+            column.prop(light, "size")
+        else:
+            column.prop(light, "size", text="Size X")
+            column.prop(light, "size_y", text="Y")
+        column.prop(light, "spread")
     else:
         radius = column.column()
         radius.active = False

@@ -326,15 +326,21 @@ def test_lights_and_world(registered, tmp_path):
     spot = link(bpy.data.objects.new("Spot", bpy.data.lights.new("Spot", "SPOT")))
     spot.data.spot_size, spot.data.spot_blend = math.radians(30), 0.3
     spot.data.spectral.enabled = True
-    link(bpy.data.objects.new("Panel", bpy.data.lights.new("Panel", "AREA")))
+    panel = link(bpy.data.objects.new("Panel", bpy.data.lights.new("Panel", "AREA")))
+    panel.data.shape, panel.data.size, panel.data.size_y = "RECTANGLE", 2.0, 0.5
+    panel.scale = (1.5, 1.0, 1.0)
+    panel.data.spectral.enabled = True
     bpy.context.scene.world = bpy.data.worlds.new("Sky")
     bpy.context.scene.world.spectral.enabled = True
     bpy.context.scene.world.spectral.kind = "sky"
     bpy.context.scene.world.spectral.strength = 0.5
     result = _export()
     lights = {light.name: light for light in result.scene.lights}
-    assert set(lights) == {"Sun", "Bulb", "Spot", "Sky"}
-    assert any("1 area light (Panel)" in warning for warning in result.warnings)
+    assert set(lights) == {"Sun", "Bulb", "Spot", "Panel", "Sky"}
+    assert result.warnings == []
+    panel = lights["Panel"]
+    assert (panel.area_shape, panel.size_x, panel.size_y) == ("rectangle", pytest.approx(3.0), pytest.approx(0.5))
+    np.testing.assert_allclose(panel.area_axes, np.eye(3), atol=1e-6)
     # Blender's sun shines along its −Z; ours points towards the sun (+Z), tilted by the 45° X rotation.
     np.testing.assert_allclose(lights["Sun"].direction, [0.0, -math.sqrt(0.5), math.sqrt(0.5)], atol=1e-6)
     assert lights["Sun"].strength == 3.0

@@ -107,7 +107,9 @@ def test_light_spectrum_shows_presets_and_swatch(registered):
     assert any(name == "prop" and args[1] == "preview" for name, args, _k in layout.calls)
     area = lights[3]
     layout = draw(bpy.types.SPECTRAL_PT_light, _context(scene, area))
-    assert any("not rendered yet" in text for text in layout.texts())
+    for name in ("shape", "size", "spread"):
+        assert layout.index("prop", area.data, name) is not None
+    assert any(name == "prop" and args[1] == "preview" for name, args, _k in layout.calls)
 
 
 def test_light_size_is_drawn_sun_angle_and_greyed_radius(registered):
