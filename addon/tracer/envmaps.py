@@ -7,20 +7,11 @@ import numpy as np
 
 from .kernels.envmap import row_solid_angle
 from .scene import Light
-from .spectra import Spectrum
-
-
-def basis_values(light: Light) -> np.ndarray:
-    """(3, GRID): the light's basis, given as an array or as three spectra."""
-    basis = light.basis
-    if not isinstance(basis, np.ndarray) and all(isinstance(item, Spectrum) for item in basis):
-        basis = [item.values for item in basis]
-    return np.asarray(basis, dtype=np.float64)
 
 
 def kernel_basis(light: Light) -> np.ndarray:
     """(3, GRID): the radiance of a texel of unit R, G and B: the light's basis times its strength."""
-    return light.strength * basis_values(light)
+    return light.strength * light.basis_values()
 
 
 def texel_solid_angles(light: Light) -> np.ndarray:

@@ -85,5 +85,5 @@ def texel_weights(light: Light, cmf: str) -> np.ndarray:
     """(H, W): what an envmap's texels are drawn in proportion to: their power proxy, Σ_c rgb_c times the proxy
     luminance of the channel's basis (`proxy_luminance`; at strength 1, so a light of strength 0 has them too),
     times their solid angle. Positive wherever the texel's radiance is."""
-    channels = np.array([proxy_luminance(spd, cmf) for spd in envmaps.basis_values(light)])
+    channels = np.array([proxy_luminance(spd, cmf) for spd in light.basis_values()])
     return (np.asarray(light.image, dtype=np.float64) @ channels) * envmaps.texel_solid_angles(light)

@@ -179,6 +179,13 @@ class Light:
     name: str = ""
     unit: str = "luminous"  # "luminous" | "radiant"
 
+    def basis_values(self) -> np.ndarray:
+        """An envmap's basis as an array (3, GRID): it may be given as one or as three spectra."""
+        basis = self.basis
+        if isinstance(basis, (list, tuple)) and all(isinstance(item, Spectrum) for item in basis):
+            basis = [item.values for item in basis]
+        return np.asarray(basis, dtype=np.float64)
+
 
 @dataclass(frozen=True, eq=False)
 class Camera:
@@ -415,12 +422,12 @@ def _check_envmap(light: Light, where: str) -> None:
     if light.unit != "radiant":
         raise SpectralError(f"{where}.unit: an envmap's strength multiplies its map (radiance = strength × Σ rgb · "
                             f"basis): its unit must be \"radiant\", found {checks.shown(light.unit)}")
-    image = _float_array(light.image, f"{where}.image")
+    image = _float_array(lambda: light.image, f"{where}.image")
     if image.ndim != 3 or image.shape[0] < 1 or image.shape[1] < 2 or image.shape[2] != 3:
         raise SpectralError(f"{where}.image: expected an array of H ≥ 1 rows, W ≥ 2 columns and 3 channels (R, G, "
                             f"B), found shape {image.shape}")
     _check_finite_nonnegative(image, f"{where}.image", "texel [row, column, channel]")
-    basis = _float_array(light.basis, f"{where}.basis")
+    basis = _float_array(light.basis_values, f"{where}.basis")
     if basis.shape != (3, GRID.size):
         raise SpectralError(f"{where}.basis: expected 3 spectra (R, G, B) on the {GRID.size}-node grid, found shape "
                             f"{basis.shape}")
@@ -435,14 +442,12 @@ def _check_envmap(light: Light, where: str) -> None:
                                 f"cosines off by up to {error:.3g}")
 
 
-def _float_array(value, where: str) -> np.ndarray:
-    """`value` as a float64 array (a list of spectra as their values)."""
-    if isinstance(value, (list, tuple)) and value and all(isinstance(item, Spectrum) for item in value):
-        value = [item.values for item in value]
+def _float_array(values, where: str) -> np.ndarray:
+    """The float64 array that `values()` gives, or an error naming `where`."""
     try:
-        return np.asarray(value, dtype=np.float64)
+        return np.asarray(values(), dtype=np.float64)
     except (TypeError, ValueError):
-        raise SpectralError(f"{where}: expected an array of numbers, found {checks.shown(value)}") from None
+        raise SpectralError(f"{where}: expected an array of numbers") from None
 
 
 def _check_finite_nonnegative(values: np.ndarray, where: str, index: str) -> None:

@@ -14,7 +14,6 @@ import numpy as np
 from . import checks, spectra
 from .checks import shown
 from .errors import SpectralError
-from .envmaps import basis_values
 from .film import check_film_memory, film_bytes
 from .grids import affine_matrix, load_grid, save_grid_npy
 from .scene import (LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
@@ -448,7 +447,7 @@ def _light_json(light: Light, index: int, folder: Path) -> dict:
     if light.kind == "envmap":
         data["image"] = f"lights{index}_image.npy"
         np.save(folder / data["image"], np.ascontiguousarray(light.image, dtype=np.float32), allow_pickle=False)
-        data["basis"] = [_spectrum_json(Spectrum(values)) for values in basis_values(light)]
+        data["basis"] = [_spectrum_json(Spectrum(values)) for values in light.basis_values()]
         if light.to_world is not None:
             data["to_world"] = _floats(light.to_world)
     return data

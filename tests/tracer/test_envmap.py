@@ -13,7 +13,6 @@ import pytest
 from scipy import stats
 
 from addon.tracer import colorimetry, spectra
-from addon.tracer.envmaps import basis_values
 from addon.tracer.errors import SpectralError
 from addon.tracer.kernels.envmap import row_solid_angle, texel_of
 from addon.tracer.kernels.light_sampling import infinite_pdf, infinite_radiance, sample_light
@@ -108,7 +107,7 @@ def test_light_sampling_estimates_the_maps_integral(lam):
     turn = rotation_about_z(30.0)
     ks = compiled(s.sun([0, 0, 1]), s.envmap(image, 1.7, to_world=turn))
     rows, columns = image.shape[:2]
-    basis = 1.7 * basis_values(s.envmap(image))[:, int(lam - GRID[0])]  # λ on a grid node
+    basis = 1.7 * s.envmap(image).basis_values()[:, int(lam - GRID[0])]  # λ on a grid node
     exact = ((image @ basis) * row_solid_angle(rows, columns, np.arange(rows))[:, None]).sum()
     rng = np.random.default_rng(int(lam))
     u1, u2 = rng.random(200_000), rng.random(200_000)
@@ -143,7 +142,7 @@ def test_chosen_like_an_environment_of_its_mean_luminance():
     """The selection power is π × the mean luminance over the sphere, as an environment's: a constant map of
     is chosen as often as an environment of its luminance."""
     light = s.envmap(np.full((3, 4, 3), 2.0))
-    ks = compiled(light, s.environment(colorimetry.spectrum_to_xyz(2.0 * basis_values(light).sum(axis=0))[1]))
+    ks = compiled(light, s.environment(colorimetry.spectrum_to_xyz(2.0 * light.basis_values().sum(axis=0))[1]))
     assert ks.lights.pmf == pytest.approx([0.5, 0.5], rel=1e-9)
 
 
@@ -160,7 +159,7 @@ def test_a_constant_map_renders_as_the_uniform_environment(backend):
     either has the same image mean per channel (independent seeds, within 4 combined standard errors)."""
     rgb = np.array([0.8, 0.5, 0.3])
     light = s.envmap(np.tile(rgb, (4, 6, 1)), 1.5)
-    spectrum = spectra.Spectrum(1.5 * rgb @ basis_values(light))
+    spectrum = spectra.Spectrum(1.5 * rgb @ light.basis_values())
     uniform = s.environment(spectrum.integral(), spectrum=spectrum)
     uniform = dataclasses.replace(uniform, unit="radiant")
     medium = s.medium(s.box_grid(), extinction=s.smooth_ramp(3.0, 1.0), albedo=0.9, g=0.4)
@@ -202,7 +201,7 @@ def test_scene_file_round_trip(tmp_path):
     assert (loaded.kind, loaded.strength, loaded.unit, loaded.name, loaded.spectrum) == ("envmap", 2.5, "radiant",
                                                                                       "hdri", None)
     np.testing.assert_array_equal(loaded.image, image)
-    np.testing.assert_array_equal(basis_values(loaded), basis_values(light))
+    np.testing.assert_array_equal(loaded.basis_values(), light.basis_values())
     np.testing.assert_array_equal(loaded.to_world, turn)
     a, b = compiled(light), compiled(loaded)
     for field in a.envmaps._fields:
