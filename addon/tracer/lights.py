@@ -63,9 +63,9 @@ def _scene_centre_and_radius(media: tuple[Medium, ...]) -> tuple[np.ndarray, flo
 
 def selection_powers(lights: tuple[Light, ...], spds: np.ndarray, media: tuple[Medium, ...], cmf: str) -> np.ndarray:
     """The power each light is chosen in proportion to, from its kernel spectrum `spds[i]` (`kernel_spectrum`):
-    the proxy luminance for a sun, π times it for an environment, sky or envmap (its mean radiance), and over the squared distance to
-    the media's centre (at least their bounding radius) the light's power: 4π times it for a point or spot
-    light, π times it for an area light (whichever side of it the media lie on: they may reach around it)."""
+    the proxy luminance for a sun, π times it for an environment, sky or envmap (its mean radiance), and over
+    the squared distance to the media's centre (at least their bounding radius) the light's power: 4π times it
+    for a point or spot light, π times it for an area light (whichever side of it the media lie on: they may reach around it)."""
     centre, radius = _scene_centre_and_radius(media)
     power = np.zeros(len(lights))
     for index, (light, spd) in enumerate(zip(lights, spds)):

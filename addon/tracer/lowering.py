@@ -211,8 +211,8 @@ def _envmap_arrays(lights: tuple[Light, ...], cmf: str) -> KernelEnvmaps:
     shape = np.zeros((count, 2), dtype=np.int64)
     offsets = np.zeros((3, count), dtype=np.int64)  # texels, row cdf nodes, column cdf nodes before each light
     basis, to_map = np.zeros((3 * count, GRID.size)), np.tile(np.eye(3), (count, 1, 1))
-    rgb, row_cdfs, column_cdfs = [np.zeros((0, 3), np.float32)], [np.zeros(0)], [np.zeros(0)]  # the same types
-    # in every scene, empty without an envmap
+    # The same types in every scene (the kernels' argument types), empty without an envmap.
+    rgb, row_cdfs, column_cdfs = [np.zeros((0, 3), np.float32)], [np.zeros(0)], [np.zeros(0)]
     for index, light in enumerate(lights):
         offsets[:, index] = (sum(map(len, rgb)), sum(map(len, row_cdfs)), sum(map(len, column_cdfs)))
         if light.kind != "envmap":

@@ -426,7 +426,8 @@ def _check_envmap(light: Light, where: str) -> None:
     if image.ndim != 3 or image.shape[0] < 1 or image.shape[1] < 2 or image.shape[2] != 3:
         raise SpectralError(f"{where}.image: expected an array of H ≥ 1 rows, W ≥ 2 columns and 3 channels (R, G, "
                             f"B), found shape {image.shape}")
-    _check_finite_nonnegative(image, f"{where}.image", "texel [row, column, channel]")
+    with np.errstate(over="ignore"):  # the kernels read it as float32: a value beyond float32 is inf, refused
+        _check_finite_nonnegative(image.astype(np.float32), f"{where}.image", "texel [row, column, channel]")
     basis = _float_array(light.basis_values, f"{where}.basis")
     if basis.shape != (3, GRID.size):
         raise SpectralError(f"{where}.basis: expected 3 spectra (R, G, B) on the {GRID.size}-node grid, found shape "

@@ -52,7 +52,8 @@ def direction(azimuth, elevation):
 # ----------------------------------------------------------------------------- orientation
 
 # Rendered with Cycles (Blender 5.2, Environment Texture, Closest interpolation) on an 8 × 4 map: the texel
-# (column, row from the top) that a camera looking along (azimuth, elevation) in degrees saw.
+# (column, row from the top) that a camera looking along (azimuth, elevation) in degrees saw
+# (tools/blender_envmap_texels.py).
 BLENDER_TEXELS = [((22.5, -60.0), (3, 3)), ((22.5, 60.0), (3, 0)), ((112.5, -60.0), (1, 3)), ((112.5, 60.0), (1, 0)),
                   ((202.5, -60.0), (7, 3)), ((202.5, 60.0), (7, 0)), ((292.5, -60.0), (5, 3)), ((292.5, 60.0), (5, 0))]
 
@@ -60,6 +61,20 @@ BLENDER_TEXELS = [((22.5, -60.0), (3, 3)), ((22.5, 60.0), (3, 0)), ((112.5, -60.
 @pytest.mark.parametrize("angles, texel", BLENDER_TEXELS)
 def test_directions_fall_in_the_texels_blender_shows(angles, texel):
     ks = compiled(s.envmap(np.ones((4, 8, 3))))
+    row, column = texel_of(ks, 0, *direction(*angles))
+    assert (column, row) == texel
+
+
+# The same with a Mapping node (Point) rotating the texture's vector by 90° about Z (`--mapped`): the
+# Environment Texture reads the map at R · d, so `to_world` is Rᵀ.
+BLENDER_MAPPED_TEXELS = [((22.5, -60.0), (1, 3)), ((22.5, 60.0), (1, 0)), ((112.5, -60.0), (7, 3)),
+                         ((112.5, 60.0), (7, 0)), ((202.5, -60.0), (5, 3)), ((202.5, 60.0), (5, 0)),
+                         ((292.5, -60.0), (3, 3)), ((292.5, 60.0), (3, 0))]
+
+
+@pytest.mark.parametrize("angles, texel", BLENDER_MAPPED_TEXELS)
+def test_to_world_is_the_transpose_of_blenders_mapping_rotation(angles, texel):
+    ks = compiled(s.envmap(np.ones((4, 8, 3)), to_world=rotation_about_z(90.0).T))
     row, column = texel_of(ks, 0, *direction(*angles))
     assert (column, row) == texel
 
@@ -86,16 +101,17 @@ def _texel_directions(rows, columns):
 
 def test_the_pdf_integrates_to_one_and_is_zero_on_black_texels():
     """The pdf is constant over a texel: Σ pdf(texel) · Ω(texel) = 1 exactly, and on a uniform sphere of
-    directions the mean of 4π · pdf is 1 (within 4 standard errors)."""
+    directions the mean of 4π · pdf is 1 (within 4 standard errors). The map is a scene's second envmap (its
+    arrays start after the first's)."""
     image = random_map()
-    ks = compiled(s.envmap(image))
+    ks = compiled(s.envmap(random_map(3, 4, seed=1)), s.envmap(image))
     rows, columns = image.shape[:2]
-    pdf = infinite_pdf(ks, 0, *_texel_directions(rows, columns))
+    pdf = infinite_pdf(ks, 1, *_texel_directions(rows, columns))
     solid_angle = row_solid_angle(rows, columns, np.arange(rows))[:, None]
     assert (pdf * solid_angle).sum() == pytest.approx(1.0, rel=1e-12)
     assert np.all(pdf[image.max(axis=2) == 0] == 0) and np.all(pdf[image.max(axis=2) > 0] > 0)
     d = np.random.default_rng(5).normal(size=(3, 400_000))
-    values = 4 * np.pi * infinite_pdf(ks, 0, *(d / np.linalg.norm(d, axis=0)))
+    values = 4 * np.pi * infinite_pdf(ks, 1, *(d / np.linalg.norm(d, axis=0)))
     assert abs(values.mean() - 1.0) <= SIGMAS * values.std() / np.sqrt(values.size)
 
 
@@ -121,16 +137,16 @@ def test_light_sampling_estimates_the_maps_integral(lam):
 
 def test_texels_are_drawn_as_often_as_their_probability():
     """The histogram of 100 000 drawn texels against pdf × solid angle: χ² below its 1e-4 upper quantile, and
-    no draw on a black texel."""
+    no draw on a black texel. The map is a scene's second envmap."""
     image = random_map(rows=6, columns=9, seed=8)
-    ks = compiled(s.envmap(image))
+    ks = compiled(s.envmap(random_map(3, 4, seed=1)), s.envmap(image))
     rows, columns = image.shape[:2]
     rng = np.random.default_rng(9)
     n = 100_000
-    wx, wy, wz, _, _, _ = sample_light(ks, 0, 0.0, 0.0, 0.0, rng.random(n), rng.random(n))
-    row, column = texel_of(ks, 0, wx, wy, wz)
+    wx, wy, wz, _, _, _ = sample_light(ks, 1, 0.0, 0.0, 0.0, rng.random(n), rng.random(n))
+    row, column = texel_of(ks, 1, wx, wy, wz)
     counts = np.bincount(row * columns + column, minlength=rows * columns).reshape(rows, columns)
-    probability = infinite_pdf(ks, 0, *_texel_directions(rows, columns)) * row_solid_angle(
+    probability = infinite_pdf(ks, 1, *_texel_directions(rows, columns)) * row_solid_angle(
         rows, columns, np.arange(rows))[:, None]
     assert counts[probability == 0].sum() == 0
     expected = n * probability[probability > 0]
