@@ -1,5 +1,5 @@
 """Building blocks for tracer scenes written in code: grids sampled from a field, media whose optics are
-numbers or spectra, suns, environments, cameras and smooth spectra.
+numbers or spectra, suns, environments, envmaps, cameras and smooth spectra.
 
 The demos (demo_blends/scenes.py), the tests (tests/support/scenes.py) and the benchmarks
 (bench/scenes.py) build their scenes with these, so a scene written in Python reads the same everywhere.
@@ -73,6 +73,15 @@ def sun(towards, strength: float = 1.0, *, angle: float = 0.0, spectrum=None, na
 def environment(strength: float = 1.0, spectrum=None, name: str = "") -> Light:
     """Light from every direction, `strength` its radiance Y, `spectrum` its shape (default equal energy)."""
     return Light(kind="environment", spectrum=spectrum or spectra.constant(1.0), strength=strength, name=name)
+
+
+def envmap(image, strength: float = 1.0, *, basis=None, to_world=None, name: str = "") -> Light:
+    """An envmap of linear Rec.709 `image` (H, W, 3, row 0 at the top), radiance strength × Σ rgb · basis, the
+    basis by default the emission spectra of pure R, G and B (`spectra.emission_from_rgb`)."""
+    if basis is None:
+        basis = tuple(spectra.emission_from_rgb(rgb) for rgb in np.eye(3))
+    return Light(kind="envmap", image=np.asarray(image, dtype=np.float32), basis=basis, to_world=to_world,
+                 strength=strength, unit="radiant", name=name)
 
 
 def perspective(eye, target, width: int, height: int, fov_degrees: float) -> Camera:

@@ -1,11 +1,11 @@
 """Light policies: what a light's `strength` means in its unit (`strength_scale`) and the spectrum the kernels
-take for it (`kernel_spectrum`), and how often next-event estimation chooses each light (`selection_powers`,
-which the lowering normalises to `KernelScene.lights.pmf`).
+take for it (`kernel_spectrum`), how often next-event estimation chooses each light (`selection_powers`,
+which the lowering normalises to `KernelScene.lights.pmf`) and each texel of an envmap (`texel_weights`).
 """
 
 import numpy as np
 
-from . import colorimetry
+from . import colorimetry, envmaps
 from .errors import SpectralError
 from .scene import Light, Medium
 from .spectra import Spectrum
@@ -30,7 +30,10 @@ def kernel_spectrum(light: Light, spectrum: Spectrum | None = None, cmf: str = "
     """The radiometric spectrum on the grid that the kernels take for a light (`KernelLights.spd`): its shape
     (default: `light.spectrum`) scaled to its strength (`strength_scale`), and for an area light, whose
     strength is its power P, divided by π: a Lambertian emitter's intensity along its normal, P/π (its
-    radiance P/(π · area) times its area), which its samples' falloff cos θ / d² turns into irradiance."""
+    radiance P/(π · area) times its area), which its samples' falloff cos θ / d² turns into irradiance. An
+    envmap's is its mean radiance over the sphere (`envmaps.mean_radiance`; its kernels read its map)."""
+    if light.kind == "envmap":
+        return envmaps.mean_radiance(light)
     spectrum = spectrum or light.spectrum
     values = spectrum.values * strength_scale(light, spectrum, cmf)
     return values / np.pi if light.kind == "area" else values
@@ -60,19 +63,27 @@ def _scene_centre_and_radius(media: tuple[Medium, ...]) -> tuple[np.ndarray, flo
 
 def selection_powers(lights: tuple[Light, ...], spds: np.ndarray, media: tuple[Medium, ...], cmf: str) -> np.ndarray:
     """The power each light is chosen in proportion to, from its kernel spectrum `spds[i]` (`kernel_spectrum`):
-    the proxy luminance for a sun, π times it for an environment or sky, and over the squared distance to
-    the media's centre (at least their bounding radius) the light's power: 4π times it for a point or spot
-    light, π times it for an area light (whichever side of it the media lie on: they may reach around it)."""
+    the proxy luminance for a sun, π times it for an environment, sky or envmap (its mean radiance), and over
+    the squared distance to the media's centre (at least their bounding radius) the light's power: 4π times it
+    for a point or spot light, π times it for an area light (whichever side of it the media lie on: they may reach around it)."""
     centre, radius = _scene_centre_and_radius(media)
     power = np.zeros(len(lights))
     for index, (light, spd) in enumerate(zip(lights, spds)):
         luminance = proxy_luminance(spd, cmf)
         if light.kind == "sun":
             power[index] = luminance
-        elif light.kind in ("environment", "sky"):
+        elif light.kind in ("environment", "sky", "envmap"):
             power[index] = np.pi * luminance
         else:
             distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
             solid_angle = np.pi if light.kind == "area" else 4.0 * np.pi
             power[index] = solid_angle * luminance / distance**2
     return power
+
+
+def texel_weights(light: Light, cmf: str) -> np.ndarray:
+    """(H, W): what an envmap's texels are drawn in proportion to: their power proxy, Σ_c rgb_c times the proxy
+    luminance of the channel's basis (`proxy_luminance`; at strength 1, so a light of strength 0 has them too),
+    times their solid angle. Positive wherever the texel's radiance is."""
+    channels = np.array([proxy_luminance(spd, cmf) for spd in light.basis_values()])
+    return (np.asarray(light.image, dtype=np.float64) @ channels) * envmaps.texel_solid_angles(light)

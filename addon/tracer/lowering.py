@@ -8,7 +8,7 @@ the same `KernelScene`, so they cannot disagree about the scene.
 
 import numpy as np
 
-from . import colorimetry, sampling
+from . import colorimetry, envmaps, sampling
 from .errors import SpectralError
 from .glow import normalisation_table
 from .kernels.layout import (
@@ -18,6 +18,7 @@ from .kernels.layout import (
     PHASES,
     KernelCamera,
     KernelDensity,
+    KernelEnvmaps,
     KernelFluorescence,
     KernelGlow,
     KernelLights,
@@ -29,7 +30,7 @@ from .kernels.layout import (
     KernelWavelengths,
 )
 from .kernels.media import attenuation
-from .lights import kernel_spectrum, selection_powers
+from .lights import kernel_spectrum, selection_powers, texel_weights
 from .majorant import block_size_for, glow_floor, majorant_grid, minorant_grid
 from .scene import Grid, Light, Medium, Scene
 from .wavelength_modes import default_band, with_band
@@ -204,6 +205,31 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
     return KernelLights(**out)
 
 
+def _envmap_arrays(lights: tuple[Light, ...], cmf: str) -> KernelEnvmaps:
+    """The envmap lights' maps, bases, rotations and cdfs back to back (`KernelEnvmaps`; other lights have none)."""
+    count = len(lights)
+    shape = np.zeros((count, 2), dtype=np.int64)
+    offsets = np.zeros((3, count), dtype=np.int64)  # texels, row cdf nodes, column cdf nodes before each light
+    basis, to_map = np.zeros((3 * count, GRID.size)), np.tile(np.eye(3), (count, 1, 1))
+    # The same types in every scene (the kernels' argument types), empty without an envmap.
+    rgb, row_cdfs, column_cdfs = [np.zeros((0, 3), np.float32)], [np.zeros(0)], [np.zeros(0)]
+    for index, light in enumerate(lights):
+        offsets[:, index] = (sum(map(len, rgb)), sum(map(len, row_cdfs)), sum(map(len, column_cdfs)))
+        if light.kind != "envmap":
+            continue
+        shape[index] = light.image.shape[:2]
+        rgb.append(np.asarray(light.image, dtype=np.float32).reshape(-1, 3))
+        basis[3 * index:3 * index + 3] = envmaps.kernel_basis(light)
+        if light.to_world is not None:
+            to_map[index] = np.asarray(light.to_world, dtype=np.float64).T
+        row_cdf, column_cdf = envmaps.cdfs(texel_weights(light, cmf))
+        row_cdfs.append(row_cdf)
+        column_cdfs.append(column_cdf)
+    return KernelEnvmaps(rgb=np.concatenate(rgb), basis=basis, to_map=to_map, shape=shape, texel_offset=offsets[0],
+                         row_cdf=np.concatenate(row_cdfs), row_cdf_offset=offsets[1],
+                         column_cdf=np.concatenate(column_cdfs), column_cdf_offset=offsets[2])
+
+
 def camera_extent(camera) -> np.ndarray:
     """Film extent (x, y) and shift (x, y) in camera space: at z = -1 (perspective) or absolute (ortho).
     The frame's aspect is width · pixel_aspect : height, and AUTO fits its larger side (as Blender)."""
@@ -231,6 +257,7 @@ def compile_scene(scene: Scene) -> KernelScene:
         ),
         **_media_arrays(scene.media, settings.cmf),
         lights=_light_arrays(scene.lights, scene.media, settings.cmf),
+        envmaps=_envmap_arrays(scene.lights, settings.cmf),
         wavelengths=KernelWavelengths(
             cdf=np.zeros(GRID.size),
             pdf=np.zeros(GRID.size - 1),

@@ -31,10 +31,12 @@ SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 LIGHT_UNITS = ("luminous", "radiant")
 # The radiant unit of each light kind's strength.
 RADIANT_UNITS = {"sun": "W·m⁻²", "environment": "W·m⁻²·sr⁻¹", "sky": "W·m⁻²·sr⁻¹", "point": "W·sr⁻¹",
-                 "spot": "W·sr⁻¹", "area": "W"}
+                 "spot": "W·sr⁻¹", "area": "W", "envmap": "× its map"}
 # An area light's axes (the columns of `Light.area_axes`) may be this far from orthogonal (the cosine of
 # their angle): Blender's float32 matrices are orthogonal to about 1e-7.
 AREA_AXES_ORTHOGONAL_TO = 1e-5
+# An envmap's `to_world` may be this far from orthonormal (its columns' lengths from 1, their cosines from 0).
+ENVMAP_ORTHONORMAL_TO = 1e-5
 WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "colour")
 BACKENDS = ("numba", "numpy")
 SEED_MAX = 2**64 - 1  # seeds are unsigned 64-bit integers in the kernels' random streams
@@ -138,10 +140,27 @@ class Light:
     ignored), emitting along its local −Z (the third column) with radiance P / (π · area) on that side
     and none behind, P being its power (`strength`). It is only sampled by next-event estimation: camera
     rays and scattered rays pass through it unseen (Cycles may show an area light to the camera; this
-    tracer draws none)."""
+    tracer draws none).
 
-    kind: str  # "sun" | "environment" | "sky" | "point" | "spot" | "area"
-    spectrum: Spectrum
+    An envmap is an equirectangular image around the scene (Blender's Environment Texture), with no
+    `spectrum`: the radiance arriving from world direction ω is, in W·m⁻²·sr⁻¹·nm⁻¹,
+
+        L(ω, λ) = strength · Σ_c image[row, column, c] · basis[c](λ)     (c = R, G, B)
+
+    at the texel that ω falls in (nearest texel: no interpolation). `strength` is a plain factor (Blender's
+    Background Strength), so `unit` must be "radiant"; `basis` holds the radiance of a texel of unit R, G and B
+    (`spectra.emission_from_rgb((1, 0, 0))` etc. give each texel the XYZ of its linear Rec.709 RGB, with white
+    (1, 1, 1) of luminance Y = 1). `image` is (H, W, 3), H ≥ 1, W ≥ 2, row 0 at the top (Blender's image
+    pixels are stored bottom row first: flip them). With (x, y, z) = to_worldᵀ ω, the direction in the map's
+    frame, ω falls at Cycles' `direction_to_equirectangular` coordinates u = 0.5 − atan2(y, x) / 2π (across the
+    columns, from the left: +X at the centre, +Y at u = 0.25) and v = 0.5 + asin(z) / π (v = 1 at the top row),
+    i.e. column ⌊u W⌋ and row ⌊(1 − v) H⌋ = ⌊acos(z) H / π⌋. `to_world` (3 × 3, orthonormal, default the
+    identity) takes the map's frame to world directions: the rotation of the Environment Texture's Mapping
+    node (Vector type "Point" or "Vector"; it rotates the lookup direction, so pass its inverse, the transpose
+    of that rotation)."""
+
+    kind: str  # "sun" | "environment" | "sky" | "point" | "spot" | "area" | "envmap"
+    spectrum: Spectrum | None = None  # every kind but "envmap"
     strength: float = 1.0
     direction: np.ndarray | None = None  # sun: unit vector pointing from the scene towards the sun
     angle: float = 0.0  # sun: angular diameter (radians)
@@ -154,8 +173,18 @@ class Light:
     area_shape: str = "rectangle"  # area: "rectangle" | "ellipse"
     size_x: float = 1.0  # area: width along its local X (the ellipse's diameter), in world units
     size_y: float = 1.0  # area: height along its local Y
+    image: np.ndarray | None = None  # envmap: (H, W, 3) linear Rec.709 texels, row 0 at the top (+Z)
+    basis: np.ndarray | tuple[Spectrum, ...] | None = None  # envmap: (3, GRID) or 3 spectra, per unit R, G, B
+    to_world: np.ndarray | None = None  # envmap: (3, 3) the map's frame → world directions (None: identity)
     name: str = ""
     unit: str = "luminous"  # "luminous" | "radiant"
+
+    def basis_values(self) -> np.ndarray:
+        """An envmap's basis as an array (3, GRID): it may be given as one or as three spectra."""
+        basis = self.basis
+        if isinstance(basis, (list, tuple)) and all(isinstance(item, Spectrum) for item in basis):
+            basis = [item.values for item in basis]
+        return np.asarray(basis, dtype=np.float64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,8 +252,8 @@ class Scene:
         for index, light in enumerate(self.lights):
             _check_light(light, f"lights[{index}]", self.settings.cmf)
         if not self.lights and not any(medium.emits() for medium in self.media):
-            raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, point, spot or "
-                                "area light (or an emitting medium)")
+            raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, envmap, point, spot "
+                                "or area light (or an emitting medium)")
         if self.lights and not any(light.strength > 0 for light in self.lights):
             raise SpectralError("lights: every light has strength 0, so nothing is lit")
         return self
@@ -358,7 +387,12 @@ def _check_temperature(grid: Grid | None, scale, offset, where: str) -> None:
 def _check_light(light: Light, where: str, cmf: str) -> None:
     kind = checks.one_of(light.kind, f"{where}.kind", LIGHT_KINDS)
     unit = checks.one_of(light.unit, f"{where}.unit", LIGHT_UNITS)
-    _check_light_spectrum(light.spectrum, f"{where}.spectrum", unit, cmf)
+    if kind == "envmap":
+        _check_envmap(light, where)
+    elif light.spectrum is None:
+        raise SpectralError(f"{where}.spectrum: a {kind} light needs a spectrum")
+    else:
+        _check_light_spectrum(light.spectrum, f"{where}.spectrum", unit, cmf)
     checks.within(checks.number(light.strength, f"{where}.strength"), f"{where}.strength", 0.0)
     if not isinstance(light.name, str):
         raise SpectralError(f"{where}.name: expected a string, found {checks.shown(light.name)}")
@@ -379,6 +413,50 @@ def _check_light(light: Light, where: str, cmf: str) -> None:
         checks.one_of(light.area_shape, f"{where}.area_shape", AREA_SHAPES)
         for key in ("size_x", "size_y"):
             checks.positive(checks.number(getattr(light, key), f"{where}.{key}"), f"{where}.{key}")
+
+
+def _check_envmap(light: Light, where: str) -> None:
+    """An envmap's image, basis and rotation (its spectrum is its image and basis; its strength a factor)."""
+    if light.spectrum is not None:
+        raise SpectralError(f"{where}.spectrum: an envmap's colour is its image and basis: give it no spectrum")
+    if light.unit != "radiant":
+        raise SpectralError(f"{where}.unit: an envmap's strength multiplies its map (radiance = strength × Σ rgb · "
+                            f"basis): its unit must be \"radiant\", found {checks.shown(light.unit)}")
+    image = _float_array(lambda: light.image, f"{where}.image")
+    if image.ndim != 3 or image.shape[0] < 1 or image.shape[1] < 2 or image.shape[2] != 3:
+        raise SpectralError(f"{where}.image: expected an array of H ≥ 1 rows, W ≥ 2 columns and 3 channels (R, G, "
+                            f"B), found shape {image.shape}")
+    with np.errstate(over="ignore"):  # the kernels read it as float32: a value beyond float32 is inf, refused
+        _check_finite_nonnegative(image.astype(np.float32), f"{where}.image", "texel [row, column, channel]")
+    basis = _float_array(light.basis_values, f"{where}.basis")
+    if basis.shape != (3, GRID.size):
+        raise SpectralError(f"{where}.basis: expected 3 spectra (R, G, B) on the {GRID.size}-node grid, found shape "
+                            f"{basis.shape}")
+    _check_finite_nonnegative(basis, f"{where}.basis", "[channel, wavelength index]")
+    if not (image.sum(axis=(0, 1)) @ basis).any():
+        raise SpectralError(f"{where}.image: the map is black (every texel's radiance Σ rgb · basis is zero)")
+    if light.to_world is not None:
+        to_world = checks.matrix3(light.to_world, f"{where}.to_world")
+        error = np.abs(to_world.T @ to_world - np.eye(3)).max()
+        if error > ENVMAP_ORTHONORMAL_TO:
+            raise SpectralError(f"{where}.to_world: must be orthonormal (a rotation), found its columns' lengths and "
+                                f"cosines off by up to {error:.3g}")
+
+
+def _float_array(values, where: str) -> np.ndarray:
+    """The float64 array that `values()` gives, or an error naming `where`."""
+    try:
+        return np.asarray(values(), dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SpectralError(f"{where}: expected an array of numbers") from None
+
+
+def _check_finite_nonnegative(values: np.ndarray, where: str, index: str) -> None:
+    bad = ~np.isfinite(values) | (values < 0)
+    if bad.any():
+        at = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise SpectralError(f"{where}: must be finite and non-negative, found {values[at]:g} at {index} "
+                            f"{list(at)}")
 
 
 def _check_area_axes(axes, where: str) -> None:

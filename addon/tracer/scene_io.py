@@ -40,16 +40,18 @@ _FLUORESCENCE = {"required": ("excitation", "emission", "quantum_yield"), "optio
 _EMISSION = {"required": ("temperature",), "optional": ("intensity", "temperature_scale", "temperature_offset")}
 _GLOW = {"required": (),
          "optional": ("spectrum", "blackbody", "tint", "temperature", "temperature_scale", "temperature_offset")}
-_LIGHT_COMMON = ("kind", "spectrum")
+_LIGHT_COMMON = ("kind",)
 _LIGHT_OPTIONAL = ("strength", "unit", "name")
 _LIGHT_FIELDS = {
-    "sun": {"required": ("direction",), "optional": ("angle",)},
-    "environment": {"required": (), "optional": ()},
-    "sky": {"required": (), "optional": ("horizon_spectrum",)},
-    "point": {"required": ("position",), "optional": ()},
-    "spot": {"required": ("position", "spot_direction"), "optional": ("spot_size", "spot_blend")},
-    "area": {"required": ("position", "area_axes", "size_x", "size_y"), "optional": ("area_shape",)},
+    "sun": {"required": ("spectrum", "direction"), "optional": ("angle",)},
+    "environment": {"required": ("spectrum",), "optional": ()},
+    "sky": {"required": ("spectrum",), "optional": ("horizon_spectrum",)},
+    "point": {"required": ("spectrum", "position"), "optional": ()},
+    "spot": {"required": ("spectrum", "position", "spot_direction"), "optional": ("spot_size", "spot_blend")},
+    "area": {"required": ("spectrum", "position", "area_axes", "size_x", "size_y"), "optional": ("area_shape",)},
+    "envmap": {"required": ("image", "basis"), "optional": ("to_world",)},
 }
+_ENVMAP_UNIT = "radiant"  # an envmap's only unit (its strength multiplies its map), so the file may omit it
 _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettings))}
 
 
@@ -250,9 +252,33 @@ def _light(value, where: str, folder: Path) -> Light:
         fields["area_shape"] = data.get("area_shape", Light.area_shape)
         for key in ("size_x", "size_y"):
             fields[key] = checks.number(data[key], f"{where}.{key}")
-    return Light(kind=kind, spectrum=_spectrum(data["spectrum"], f"{where}.spectrum", folder),
-                 strength=checks.number(data.get("strength", 1.0), f"{where}.strength"), name=data.get("name", ""),
-                 unit=data.get("unit", Light.unit), **fields)
+    if kind == "envmap":
+        fields["image"] = _image(data["image"], f"{where}.image", folder)
+        basis = _list(data["basis"], f"{where}.basis")
+        if len(basis) != 3:
+            raise SpectralError(f"{where}.basis: expected 3 spectra (R, G, B), found {len(basis)}")
+        fields["basis"] = tuple(_spectrum(item, f"{where}.basis[{i}]", folder) for i, item in enumerate(basis))
+        if "to_world" in data:
+            fields["to_world"] = checks.matrix3(data["to_world"], f"{where}.to_world")
+    else:
+        fields["spectrum"] = _spectrum(data["spectrum"], f"{where}.spectrum", folder)
+    unit = data.get("unit", _ENVMAP_UNIT if kind == "envmap" else Light.unit)
+    return Light(kind=kind, strength=checks.number(data.get("strength", 1.0), f"{where}.strength"),
+                 name=data.get("name", ""), unit=unit, **fields)
+
+
+def _image(value, where: str, folder: Path) -> np.ndarray:
+    """An envmap's image: a `.npy` file of shape (H, W, 3), named relative to the scene's folder (`Scene.validate`
+    checks its values)."""
+    if not isinstance(value, str):
+        raise SpectralError(f"{where}: expected the name of a .npy file, found {shown(value)}")
+    path = folder / value
+    try:
+        return np.load(path, allow_pickle=False)
+    except FileNotFoundError:
+        raise SpectralError(f"{where}: the file {path} does not exist") from None
+    except (OSError, ValueError) as problem:
+        raise SpectralError(f"{where}: the file {path} is not a .npy array: {problem}") from None
 
 
 def _render(value, where: str) -> RenderSettings:
@@ -318,7 +344,7 @@ def save_scene(scene: Scene, folder) -> Path:
         "version": VERSION,
         "camera": _camera_json(scene.camera),
         "media": [_medium_json(medium, i, folder) for i, medium in enumerate(scene.media)],
-        "lights": [_light_json(light) for light in scene.lights],
+        "lights": [_light_json(light, i, folder) for i, light in enumerate(scene.lights)],
         "render": {key: getattr(scene.settings, key) for key in _RENDER["optional"]},
     }
     path = folder / SCENE_FILE
@@ -397,8 +423,10 @@ def _spectrum_json(spectrum: Spectrum):
     return {"type": "table", "wavelengths": GRID.tolist(), "values": values.tolist()}
 
 
-def _light_json(light: Light) -> dict:
-    data = {"kind": light.kind, "name": light.name, "spectrum": _spectrum_json(light.spectrum)}
+def _light_json(light: Light, index: int, folder: Path) -> dict:
+    data = {"kind": light.kind, "name": light.name}
+    if light.spectrum is not None:
+        data["spectrum"] = _spectrum_json(light.spectrum)
     data["strength"] = float(light.strength)
     data["unit"] = light.unit
     if light.kind == "sun":
@@ -416,6 +444,12 @@ def _light_json(light: Light) -> dict:
         data["area_axes"] = _floats(light.area_axes)
         data["area_shape"] = light.area_shape
         data["size_x"], data["size_y"] = float(light.size_x), float(light.size_y)
+    if light.kind == "envmap":
+        data["image"] = f"lights{index}_image.npy"
+        np.save(folder / data["image"], np.ascontiguousarray(light.image, dtype=np.float32), allow_pickle=False)
+        data["basis"] = [_spectrum_json(Spectrum(values)) for values in light.basis_values()]
+        if light.to_world is not None:
+            data["to_world"] = _floats(light.to_world)
     return data
 
 
@@ -499,4 +533,6 @@ def _describe_light(light: Light) -> str:
         text += f", at ({', '.join(f'{c:.4g}' for c in light.position)})"
     if light.kind == "area":
         text += f", {light.area_shape} {light.size_x:.4g} × {light.size_y:.4g}"
+    if light.kind == "envmap":
+        text += f", a {light.image.shape[1]} × {light.image.shape[0]} map"
     return text

@@ -140,8 +140,22 @@ def area_lights():
     return s.scene(s.perspective_camera(8, 8), [medium], [rectangle, disk])
 
 
+def envmap():
+    """A turned envmap of random colours with a black block, beside a sun: grey extinction (MIS with residual
+    tracking) and a chromatic albedo. Its basis is smooth ramps: `spectra.emission_from_rgb` fits its spectra
+    with NumPy's elementary functions, whose last bits differ in the NumPy backend's child process."""
+    rng = np.random.default_rng(6)
+    image = rng.uniform(0.0, 3.0, (6, 10, 3))
+    image[2:4, 3:6] = 0.0
+    turn = np.array([[0.0, -0.6, 0.8], [1.0, 0.0, 0.0], [0.0, 0.8, 0.6]])
+    medium = s.medium(s.box_grid(), extinction=2.5, albedo=s.smooth_ramp(0.95, 0.7), g=0.4)
+    basis = (s.smooth_ramp(0.1, 1.0), spectra.constant(0.6), s.smooth_ramp(1.0, 0.05))
+    light = s.envmap(image, 0.8, basis=basis, to_world=turn)
+    return s.scene(s.perspective_camera(8, 8), [medium], [light, s.sun([1, 0, 1], 1.0)])
+
+
 SCENES = {build.__name__: build for build in (grey_furnace, chromatic, heterogeneous, fluorescence, blackbody,
-                                              glow, rayleigh, two_media, point_and_spot, area_lights)}
+                                              glow, rayleigh, two_media, point_and_spot, area_lights, envmap)}
 
 
 def render_film(scene, backend, seed, spp=SPP) -> Film:

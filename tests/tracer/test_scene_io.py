@@ -279,7 +279,7 @@ BAD = [
     ("media[0].density.index_to_world", np.zeros((4, 4)).tolist(), ["media[0].density.index_to_world", "bottom row"]),
     ("media[0].density.grid", 7, ["media[0].density.grid: expected a grid name"]),
     ("media[0].density.scale", 1, ["media[0].density: unknown field 'scale'", "allowed: file, grid, index_to_world"]),
-    ("lights", [], ["the scene has no lights: add a sun, environment, sky, point, spot or area light"]),
+    ("lights", [], ["the scene has no lights: add a sun, environment, sky, envmap, point, spot or area light"]),
     ("lights", DELETE, ["the scene has no lights"]),
     ("lights[0].kind", "mesh", ["lights[0].kind", "'mesh'", "sun, environment, sky, point, spot, area"]),
     ("lights[0].kind", DELETE, ["lights[0]: a light is an object with a \"kind\""]),

@@ -14,7 +14,7 @@ import numpy as np
 
 CAMERA_KINDS = ("perspective", "orthographic")
 PHASES = ("hg", "rayleigh")
-LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot", "area")
+LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot", "area", "envmap")
 AREA_SHAPES = ("rectangle", "ellipse")  # an area light's shape (a square and a disk are their equal-sided cases)
 WAVELENGTHS_PER_PATH = (1, 4)  # the hero alone, or the hero and 3 rotated wavelengths (spectral MIS)
 
@@ -25,6 +25,7 @@ LIGHT_ENVIRONMENT = LIGHT_KINDS.index("environment")
 LIGHT_SKY = LIGHT_KINDS.index("sky")
 LIGHT_SPOT = LIGHT_KINDS.index("spot")
 LIGHT_AREA = LIGHT_KINDS.index("area")
+LIGHT_ENVMAP = LIGHT_KINDS.index("envmap")
 AREA_ELLIPSE = AREA_SHAPES.index("ellipse")
 MAX_WAVELENGTHS_PER_PATH = max(WAVELENGTHS_PER_PATH)
 # Shadow rays whose every transmittance is below this play Russian roulette, stopping with this probability.
@@ -115,7 +116,8 @@ class KernelLights(NamedTuple):
     """The lights (NL): their kind, spectra and geometry, and how next-event estimation selects them."""
 
     kind: np.ndarray
-    # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky), intensity (point/spot; area: along its normal)
+    # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky; envmap: its mean), intensity (point/spot; area:
+    # along its normal)
     spd: np.ndarray
     spd_horizon: np.ndarray  # (NL, GRID) sky only
     dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots; the direction an area light emits along
@@ -126,6 +128,21 @@ class KernelLights(NamedTuple):
     smooth: np.ndarray  # (NL,) spot edge width in cosine
     pmf: np.ndarray  # (NL,) selection probability for next-event estimation
     power: np.ndarray  # (NL,) selection power (`lights.selection_powers`) that `pmf` normalises
+
+
+class KernelEnvmaps(NamedTuple):
+    """The envmap lights' equirectangular maps (`kernels/envmap.py`) and their sampling distributions, every
+    map's back to back in flat arrays from its light's offsets (a light without a map has shape (0, 0))."""
+
+    rgb: np.ndarray  # (texels, 3) float32: each map's texels row by row, row 0 at the top (the map's +Z pole)
+    basis: np.ndarray  # (3 NL, GRID) rows 3 · light + c: the radiance of a texel of unit channel c (R, G, B)
+    to_map: np.ndarray  # (NL, 3, 3) world directions to the map's frame (the transpose of its `to_world`)
+    shape: np.ndarray  # (NL, 2) rows H and columns W
+    texel_offset: np.ndarray  # (NL,) the map's first texel in `rgb`
+    row_cdf: np.ndarray  # (H + 1 per map) the cdf over the rows, 0 … 1
+    row_cdf_offset: np.ndarray  # (NL,)
+    column_cdf: np.ndarray  # (H (W + 1) per map) each row's cdf over its columns, 0 … 1
+    column_cdf_offset: np.ndarray  # (NL,)
 
 
 class KernelWavelengths(NamedTuple):
@@ -160,5 +177,6 @@ class KernelScene(NamedTuple):
     media: KernelMedia
     fluorescence: KernelFluorescence
     lights: KernelLights
+    envmaps: KernelEnvmaps
     wavelengths: KernelWavelengths
     termination: KernelTermination

@@ -13,7 +13,8 @@ import numpy as np
 
 from ..phase import INV_FOUR_PI, sample_direction
 from ..shared_math import select, shared, shared_inline
-from .layout import AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN
+from .envmap import envmap_pdf, envmap_radiance, envmap_sample
+from .layout import AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_ENVMAP, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN
 from .lookups import table_at
 
 # The solid angles within which a rectangle light is sampled by solid angle (pbrt-v4's bounds): a smaller one
@@ -41,7 +42,7 @@ def is_delta(ks, light):
     kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
         return ks.lights.cos[light] >= 1.0
-    return kind != LIGHT_ENVIRONMENT and kind != LIGHT_SKY
+    return kind != LIGHT_ENVIRONMENT and kind != LIGHT_SKY and kind != LIGHT_ENVMAP
 
 
 @shared_inline
@@ -61,10 +62,13 @@ def in_sun_cone(ks, light, dx, dy, dz):
 def infinite_radiance(ks, light, at, dx, dy, dz):
     """Radiance of a non-delta infinite light along direction(s) (dx, dy, dz) at the wavelengths located
     by `at` (0 for other lights): an environment's spectrum; a sky's zenith and horizon spectra blended by
-    the direction's elevation sine; a finite sun's spectrum (its irradiance) over π sin²θ in its cone."""
+    the direction's elevation sine; an envmap's texel (`envmap.envmap_radiance`); a finite sun's spectrum (its
+    irradiance) over π sin²θ in its cone."""
     kind = ks.lights.kind[light]
     if kind == LIGHT_ENVIRONMENT:
         return table_at(ks.lights.spd, light, at)
+    if kind == LIGHT_ENVMAP:
+        return envmap_radiance(ks, light, at, dx, dy, dz)
     if kind == LIGHT_SKY:
         t = np.minimum(np.maximum(dz, 0.0), 1.0)
         return t * table_at(ks.lights.spd, light, at) + (1.0 - t) * table_at(ks.lights.spd_horizon, light, at)
@@ -81,6 +85,8 @@ def infinite_pdf(ks, light, dx, dy, dz):
     kind = ks.lights.kind[light]
     if kind == LIGHT_ENVIRONMENT or kind == LIGHT_SKY:
         return INV_FOUR_PI
+    if kind == LIGHT_ENVMAP:
+        return envmap_pdf(ks, light, dx, dy, dz)
     if kind == LIGHT_SUN and ks.lights.cos[light] < 1.0:
         return in_sun_cone(ks, light, dx, dy, dz) / sun_solid_angle(ks, light)
     return 0.0
@@ -162,7 +168,8 @@ def area_point(ks, light, px, py, pz, u1, u2):
 @shared_inline
 def sample_light(ks, light, px, py, pz, u1, u2):
     """A direction (wx, wy, wz) from point(s) (px, py, pz) towards the light for uniforms u1, u2: uniform in
-    a finite sun's cone or over the sphere for an environment or a sky, towards a point of an area light
+    a finite sun's cone or over the sphere for an environment or a sky, texel by texel for an envmap
+    (`envmap.envmap_sample`), towards a point of an area light
     (`area_point`). Returns it with its solid-angle pdf (1 for a delta light and an area light), the distance
     to the light (inf for suns and the sphere) and the falloff of a point or spot light: 1/d², times a spot's
     cone (smoothed over its blend). An area light's spectrum is its intensity P/π along its normal, its
@@ -181,6 +188,9 @@ def sample_light(ks, light, px, py, pz, u1, u2):
         wz = 1.0 - 2.0 * u1
         r = np.sqrt(np.maximum(0.0, 1.0 - wz * wz))
         return r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2), wz, INV_FOUR_PI, np.inf, 1.0
+    if kind == LIGHT_ENVMAP:
+        wx, wy, wz, direction_pdf = envmap_sample(ks, light, u1, u2)
+        return wx, wy, wz, direction_pdf, np.inf, 1.0
     position = ks.lights.pos[light]
     qx, qy, qz, solid_angle = position[0], position[1], position[2], 0.0
     if kind == LIGHT_AREA:

@@ -1,5 +1,5 @@
 """Look-ups of the kernel scene's tables and grids: spectra on the wavelength grid (linear between its
-nodes, 0 off the grid) and cell-centre grids (trilinear, 0 outside).
+nodes, 0 off the grid), cell-centre grids (trilinear, 0 outside) and the bins of discrete cdfs.
 
 Plain arithmetic shared by both backends (`shared_math`): one path's scalars in the Numba kernel, arrays of
 paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`).
@@ -7,7 +7,7 @@ paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_
 
 import numpy as np
 
-from ..shared_math import shared, shared_inline
+from ..shared_math import select, shared, shared_inline
 from ..wavelengths import GRID, LAMBDA_MIN
 
 _NODES = GRID.size
@@ -65,3 +65,28 @@ def trilinear(data, offset, shape, x, y, z):
     total = total + wx1 * wy0 * wz1 * data[offset + x1 + y0 + z1]
     total = total + wx0 * wy1 * wz1 * data[offset + x0 + y1 + z1]
     return total + wx1 * wy1 * wz1 * data[offset + x1 + y1 + z1]
+
+
+# u is clamped below 1 (a u of 1 would pass the cdf's last node), and the position in a bin stays below 1 by
+# far more than rounding, so that what is placed by it stays inside the bin.
+_U_BELOW_ONE = 1.0 - 2.0**-53
+_T_BELOW_ONE = 1.0 - 2.0**-30
+
+
+@shared
+def cdf_bin(cdf, start, bins, u):
+    """The bin k (0 ≤ k < bins) of a cdf stored as cdf[start], …, cdf[start + bins] (rising from 0 to exactly 1)
+    in which a uniform u falls, cdf[start + k] ≤ u < cdf[start + k + 1] (by bisection), and u's position in
+    it, in [0, 1). A bin of probability 0 is never returned. `start` and `u` may be arrays of paths."""
+    u = np.minimum(np.maximum(u, 0.0), _U_BELOW_ONE)
+    low = start + np.int64(0.0 * u)
+    high = low + bins
+    span = bins
+    while span > 1:  # each step at least halves high − low, rounding up
+        span = (span + 1) // 2
+        middle = (low + high) // 2
+        below = cdf[middle] <= u
+        low, high = select(below, middle, low), select(below, high, middle)
+    first = cdf[low]
+    position = (u - first) / np.maximum(cdf[low + 1] - first, 1e-300)
+    return low - start, np.minimum(np.maximum(position, 0.0), _T_BELOW_ONE)

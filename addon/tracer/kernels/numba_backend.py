@@ -921,21 +921,21 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
     _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.glow, ks.media, ks.fluorescence, ks.lights,
-                 ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
+                 ks.envmaps, ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
                  sum_xyz, sum_sq)
 
 
 @jit(parallel=True, nogil=True)
-def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, wavelengths, termination,
-                 x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, wavelengths,
+                 termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
     """`render_tile`'s runs of pixels, in parallel. The kernel scene comes as its groups, and each run puts
     them together again: Numba's parallel loop hands a tuple to its threads member by member, which fails
     when a member is a tuple itself."""
     pixels = tile_width * tile_height
     chunks = min(pixels, PIXEL_CHUNKS)
     for chunk in prange(chunks):
-        ks = KernelScene(camera, density, majorant, temperature, glow, media, fluorescence, lights, wavelengths,
-                         termination)
+        ks = KernelScene(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps,
+                         wavelengths, termination)
         _render_pixels(ks, x0, y0, tile_width, chunk * pixels // chunks, (chunk + 1) * pixels // chunks, sample_begin,
                        sample_end, seed, band, sum_xyz, sum_sq)
 
