@@ -249,6 +249,7 @@ def plan_bands(scene: Scene, target: float = TARGET_DELTA_E, max_renders: int = 
     """The fewest bands whose estimated colour error is below `target` within `max_renders` Cycles renders."""
     if max_renders < 1:
         raise SpectralError(f"the Cycles emulation needs a budget of at least 1 render, got {max_renders}")
+    parameters.require_emulable(scene)
     estimator = _Estimator(scene)
     lo, hi = estimator.lo, estimator.hi
     sensitivity = colorimetry.cmf(estimator.cmf).sum(axis=0)

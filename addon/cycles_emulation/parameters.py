@@ -153,9 +153,19 @@ def reference_spectrum(lights, media=()) -> np.ndarray | None:
     return total if total.any() else None
 
 
+def require_emulable(scene: Scene) -> None:
+    """Refuse what the emulation cannot render at all: an HDRI World (its per-texel spectra have no band
+    colours here)."""
+    for light in scene.lights:
+        if light.kind == "envmap":
+            raise SpectralError(f"the Cycles emulation does not render an HDRI World ({light.name or 'envmap'!r}); "
+                                "render it with the tracer (Render ▸ Renderer: Tracer)")
+
+
 def plan(scene: Scene, bands: bandlib.Bands | int) -> Plan:
     """The emulation of `scene` with `bands` (chosen ones, `band_plan.plan_bands`, or a count of equal bands
     over the tracer's rendered wavelength range)."""
+    require_emulable(scene)
     settings = scene.settings
     if isinstance(bands, int):
         if bands < 1:
@@ -163,6 +173,8 @@ def plan(scene: Scene, bands: bandlib.Bands | int) -> Plan:
         bands = bandlib.split(*default_band(settings), bands)
     media = tuple(medium_bands(medium, bands, settings.cmf) for medium in scene.media)
     warnings = [FLUORESCENCE_WARNING.format(name=m.name) for m in scene.media if m.fluorescence is not None]
+    warnings += [f"{m.name!r}: its glow (Blender's volume emission) is not emulated" for m in scene.media
+                 if m.glow is not None]
     world = next((light for light in scene.lights if light.kind in ("environment", "sky")), None)
     world_colours = (None, None)
     if world is not None:

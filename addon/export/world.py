@@ -3,12 +3,14 @@
 With the World's Spectral World on, its spectral settings (a uniform environment or a sky, in their
 unit) replace Blender's World. Otherwise the World's node tree is read: a Background (or Emission) node
 on the active output gives a uniform environment of radiance Color × Strength (the colour as an emission
-spectrum, `tracer.spectra.emission_from_rgb`). Not yet rendered as set, and named in the render report:
-an Environment Texture (rendered uniform, at the image's mean colour over the sphere) and a Sky Texture
-(not rendered).
+spectrum, `tracer.spectra.emission_from_rgb`), or, with an Environment Texture as its Color, an envmap
+light: the image (equirectangular, nearest texel, at most MAX_MAP_WIDTH wide), each texel's RGB on the
+emission spectra of pure R, G and B, turned by a Mapping node's rotation, importance-sampled. Not rendered,
+and named in the render report: a Sky Texture.
 """
 
 import numpy as np
+from mathutils import Euler
 
 from ..props.spectrum_values import to_spectrum
 from ..tracer import spectra
@@ -50,34 +52,53 @@ def image_rgb(image) -> np.ndarray | None:
     return np.ascontiguousarray(np.maximum(rgb, 0.0), dtype=np.float32)
 
 
-def image_mean_colour(image) -> tuple[float, float, float] | None:
-    """The mean linear RGB of an equirectangular image over the sphere (rows weighted by the cosine of
-    their latitude), or None when it has no pixels."""
-    rgb = image_rgb(image)
+def _map_to_world(texture, owner: str, notes) -> np.ndarray:
+    """The envmap's `to_world` from a Mapping node feeding the texture's Vector (identity without one): Cycles
+    reads the map at R·ω for a Point or Vector mapping, at R⁻¹·ω for a Texture one, so the map's frame turns
+    to the world by Rᵀ or R. Location and scale, which do not turn directions, are noted when set."""
+    found = source(texture.inputs["Vector"])
+    if found is None:
+        return np.eye(3)
+    mapping = found[0]
+    if mapping.bl_idname != "ShaderNodeMapping":
+        notes.add(f"{owner} ▸ {texture.name} ▸ Vector is driven by {mapping.name!r}, which cannot be converted: "
+                  "the map is not turned")
+        return np.eye(3)
+    rotation = np.array(Euler(mapping.inputs["Rotation"].default_value).to_matrix(), dtype=np.float64)
+    if mapping.inputs["Location"].is_linked or mapping.inputs["Rotation"].is_linked \
+            or mapping.inputs["Scale"].is_linked or np.ptp(mapping.inputs["Scale"].default_value) > 1e-6:
+        notes.add(f"{owner} ▸ {mapping.name}: only a constant rotation turns the map (driven inputs or an "
+                  "unequal scale are not rendered)")
+    return rotation if mapping.vector_type == "TEXTURE" else rotation.T
+
+
+def _environment_map(texture, strength: float, world, owner: str, notes) -> Light | None:
+    """The envmap light of an Environment Texture (equirectangular), or None (named) without an image."""
+    rgb = None if texture.image is None else image_rgb(texture.image)
     if rgb is None:
+        notes.leave_out("World texture", f"{texture.name} of {owner}, no image")
         return None
-    height, width = rgb.shape[:2]
-    latitude = (np.arange(height) + 0.5) / height * np.pi - np.pi / 2
-    weights = np.cos(latitude)[:, None, None]
-    return tuple((rgb.astype(np.float64) * weights).sum(axis=(0, 1)) / (weights.sum() * width))
+    if texture.projection != "EQUIRECTANGULAR":
+        notes.add(f"{owner} ▸ {texture.name}: {texture.projection.replace('_', ' ').title()} projection rendered "
+                  "as Equirectangular")
+    if texture.interpolation != "Closest":
+        notes.add(f"{owner} ▸ {texture.name}: {texture.interpolation} interpolation rendered as Closest")
+    basis = tuple(spectra.emission_from_rgb(primary) for primary in np.eye(3))
+    return Light(kind="envmap", image=rgb, basis=basis, to_world=_map_to_world(texture, owner, notes),
+                 strength=strength, unit="radiant", name=world.name)
 
 
-def _background_colour(node, owner: str, notes):
-    """The background's colour as RGB or Blackbody, or None when it is not rendered."""
+def _background(node, strength: float, world, owner: str, notes):
+    """The light of a background node (Background or Emission): an envmap from an Environment Texture, else a
+    uniform environment of its colour; None when it gives none (named when not rendered)."""
     found = source(node.inputs["Color"])
     if found is not None and found[0].bl_idname == "ShaderNodeTexEnvironment":
-        texture = found[0]
-        mean = None if texture.image is None else image_mean_colour(texture.image)
-        if mean is None:
-            notes.leave_out("World texture", f"{texture.name} of {owner}, no image")
-            return None
-        notes.add(f"{owner} ▸ {texture.name}: the HDRI is rendered as a uniform World of its mean colour "
-                  f"({', '.join(f'{value:.3g}' for value in mean)})")
-        return mean
+        return _environment_map(found[0], strength, world, owner, notes)
     if found is not None and found[0].bl_idname == "ShaderNodeTexSky":
         notes.leave_out("World texture", f"{found[0].name} of {owner}")
         return None
-    return colour(node, "Color", owner, notes)
+    value = colour(node, "Color", owner, notes)
+    return radiant_light("environment", _emission_spectrum(value), strength, name=world.name)
 
 
 def _emission_spectrum(value) -> spectra.Spectrum:
@@ -100,11 +121,8 @@ def export_world(world, notes) -> Light | None:
     if node.bl_idname not in BACKGROUNDS:
         notes.leave_out("World shader", f"{owner} ▸ {node.name}")
         return None
-    value = _background_colour(node, owner, notes)
     strength = max(float(number(node, "Strength", owner, notes)), 0.0)
-    if value is None or strength == 0.0:
-        return None
-    return radiant_light("environment", _emission_spectrum(value), strength, name=world.name)
+    return _background(node, strength, world, owner, notes) if strength > 0 else None
 
 
 def radiant_light(kind: str, spectrum: spectra.Spectrum, factor: float, **fields) -> Light | None:

@@ -373,3 +373,32 @@ def test_mix_shader_of_rayleigh_scatter_and_volume_coefficients_matches_cycles(f
     print(result)
     assert result.warnings == []
     assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
+
+
+@pytest.mark.parametrize("vector_type", [None, "POINT", "TEXTURE"])
+def test_an_hdri_world_lights_the_volume_as_in_cycles(factory, tmp_path, vector_type):
+    """An Environment Texture (a 32×16 float image: a warm bright patch in a blue sky over a dark ground, read
+    nearest-texel) as the only light, turned by a Mapping node (Point or Texture: inverse turns)."""
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    width, height = 32, 16
+    rows = np.linspace(1.0, 0.0, height)[:, None, None]  # Blender's first row is the bottom: 1 − v
+    pixels = np.where(rows > 0.5, [0.05, 0.04, 0.03], [0.2, 0.35, 0.8]) * np.ones((height, width, 3))
+    pixels[10:13, 4:8] = (30.0, 20.0, 9.0)  # above the horizon, a quarter turn from the map's centre
+    image = bpy.data.images.new("HDRI", width, height, float_buffer=True)
+    image.pixels.foreach_set(np.concatenate([pixels, np.ones((height, width, 1))], axis=2).astype(np.float32).ravel())
+    tree = factory.world.node_tree
+    texture = tree.nodes.new("ShaderNodeTexEnvironment")
+    texture.image, texture.interpolation = image, "Closest"
+    tree.links.new(texture.outputs["Color"], tree.nodes["Background"].inputs["Color"])
+    if vector_type is not None:
+        mapping = tree.nodes.new("ShaderNodeMapping")
+        mapping.vector_type = vector_type
+        mapping.inputs["Rotation"].default_value = (0.3, 0.0, math.radians(100.0))
+        tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"], mapping.inputs["Vector"])
+        tree.links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
+    volume_shader(_cube_material(), Color=(0.8, 0.8, 0.8), Density=1.5, Anisotropy=0.3)
+    assert [light.kind for light in _export().scene.lights] == ["envmap"]
+    result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(result)
+    assert result.warnings == []
+    assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
