@@ -6,10 +6,12 @@ Which objects become what (the first material with a volume shader or Spectral V
 - A material renders from its volume node tree as Cycles means it (`media.shader_media`), or, with its
   Spectral Volume on, from its spectral settings (the object's Density Grid, and the material's
   temperature grid when it glows).
-- Sun, point and spot lights (`lights`); the World (`world`); the scene camera.
-- What is not rendered as set (surfaces, area lights, unconvertible node inputs) is named in one warning
-  (`notes`); nothing is skipped silently.
-Materials are per metre, so the scene's Unit Scale scales them (addon.export.media). Motion blur and
+- Sun, point, spot and area lights (`lights`); the World, an HDRI included (`world`); the scene camera.
+- What is not rendered as set (surfaces, mesh lights, a Sky Texture, unconvertible node inputs) is named
+  in one warning (`nodes.notes`); nothing is skipped silently. Problems name Blender's objects, lights
+  and World, not the exported indices (`validated`).
+Spectral materials are per metre, so the scene's Unit Scale scales them (addon.export.media); node
+values are per Blender unit, as in Cycles. Motion blur and
 non-square pixels cannot be rendered: each gives one warning.
 Everything is read from the evaluated depsgraph, so animation and drivers are those of its frame (a
 render's own depsgraph never writes them back to the original data), and the instances it lists count:
