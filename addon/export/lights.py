@@ -23,7 +23,7 @@ import numpy as np
 from ..props.spectrum_values import to_spectrum
 from ..tracer import spectra
 from ..tracer.scene import Light
-from ..nodes.graph import Blackbody, colour, number, output_source
+from ..nodes.graph import colour, number, output_source, reflectance_spectrum
 from .world import radiant_light
 
 SUPPORTED = ("SUN", "POINT", "SPOT", "AREA")
@@ -40,13 +40,6 @@ def _axis(matrix_world, column: int) -> np.ndarray:
     return axis / np.linalg.norm(axis)
 
 
-def _spectrum_of(value) -> spectra.Spectrum:
-    """A colour value of `nodes.graph` as a reflectance-like factor (a Blackbody: its luminance-1 shape)."""
-    if isinstance(value, Blackbody):
-        return spectra.blackbody_of_luminance_one(max(value.temperature, 1.0))
-    return spectra.scaled_from_rgb(np.maximum(value, 0.0))
-
-
 def light_colour(light, owner: str, notes) -> tuple[spectra.Spectrum, float]:
     """(emission spectrum, factor) of a Blender light's colour as Cycles combines it: Color × the
     Temperature's black body × an Emission node's Color and Strength."""
@@ -60,7 +53,7 @@ def light_colour(light, owner: str, notes) -> tuple[spectra.Spectrum, float]:
     if found is not None:
         node = found[0]
         if node.bl_idname == "ShaderNodeEmission":
-            spectrum = spectrum * _spectrum_of(colour(node, "Color", owner, notes))
+            spectrum = spectrum * reflectance_spectrum(colour(node, "Color", owner, notes))
             factor *= max(float(number(node, "Strength", owner, notes)), 0.0)
         else:
             notes.add(f"{owner} ▸ {node.name}: only an Emission node sets a light's colour; its Color is used")

@@ -56,11 +56,11 @@ class VolumeFields:
         if self.domain is None:
             return volume_grids(self.obj, self.depsgraph, [name], self.matrix)[0]
         if name == "temperature":
-            flame = self._read("flame")
+            flame = self.grid("flame")
             ignition, hottest = self.domain.flame_ignition, self.domain.flame_max_temp
             values = np.where(flame.values > FLAME_THRESHOLD, ignition + flame.values * (hottest - ignition), 0.0)
             return Grid(values.astype(np.float32), flame.index_to_world, "temperature")
-        return fluid_grids(self.obj, self.depsgraph, ["temperature" if name == "heat" else name], self.matrix)[0]
+        return fluid_grids(self.obj, self.depsgraph, [name], self.matrix)[0]  # its aliases: "heat" is the cache's heat
 
     def _region(self) -> Grid:
         if self.obj.type == "VOLUME":

@@ -15,7 +15,7 @@ from mathutils import Euler
 from ..props.spectrum_values import to_spectrum
 from ..tracer import spectra
 from ..tracer.scene import Light
-from ..nodes.graph import Blackbody, colour, number, output_source, source
+from ..nodes.graph import colour, emission_spectrum, number, output_source, source
 
 BACKGROUNDS = ("ShaderNodeBackground", "ShaderNodeEmission")
 
@@ -98,13 +98,7 @@ def _background(node, strength: float, world, owner: str, notes):
         notes.leave_out("World texture", f"{found[0].name} of {owner}")
         return None
     value = colour(node, "Color", owner, notes)
-    return radiant_light("environment", _emission_spectrum(value), strength, name=world.name)
-
-
-def _emission_spectrum(value) -> spectra.Spectrum:
-    if isinstance(value, Blackbody):
-        return spectra.blackbody_of_luminance_one(max(value.temperature, 1.0))
-    return spectra.emission_from_rgb(np.maximum(value, 0.0))
+    return radiant_light("environment", emission_spectrum(value), strength, name=world.name)
 
 
 def export_world(world, notes) -> Light | None:

@@ -9,15 +9,17 @@ the render report can say what was not rendered as set.
 
 from dataclasses import dataclass
 
+import numpy as np
+
+from ..tracer import colorimetry, spectra
 from .notes import Notes
 
 
 @dataclass(frozen=True)
 class Attribute:
-    """An input driven by a named attribute (a volume grid), times `factor`."""
+    """An input driven by a named attribute (a volume grid)."""
 
     name: str
-    factor: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -99,3 +101,19 @@ def colour(node, name: str, owner: str, notes: Notes):
     notes.add(f"{_where(owner, node, name)} is driven by {feeder.name!r}, which cannot be converted: "
               f"rendered at its colour ({', '.join(f'{value:.3g}' for value in default)})")
     return default
+
+
+def emission_spectrum(value) -> spectra.Spectrum:
+    """A colour value of `colour` as emitted light: an RGB's emission spectrum (`spectra.emission_from_rgb`),
+    a Blackbody's Planck shape of luminance 1 (the Blackbody node's colour is normalised so)."""
+    if isinstance(value, Blackbody):
+        return spectra.blackbody_of_luminance_one(max(value.temperature, 1.0))
+    return spectra.emission_from_rgb(np.maximum(value, 0.0))
+
+
+def reflectance_spectrum(value) -> spectra.Spectrum:
+    """A colour value of `colour` as a factor (an albedo, a tint, a coefficient): the smooth spectrum of its
+    RGB (`spectra.scaled_from_rgb`; a Blackbody by the RGB of its colour)."""
+    if isinstance(value, Blackbody):
+        value = colorimetry.xyz_to_rgb(colorimetry.spectrum_to_xyz(emission_spectrum(value).values))
+    return spectra.scaled_from_rgb(np.maximum(value, 0.0))

@@ -19,10 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..tracer import colorimetry, spectra
 from ..tracer.phase import HG_G_LIMIT
 from .notes import Notes
-from .graph import Attribute, Blackbody, colour, number, output_source, source
+from .graph import Attribute, colour, emission_spectrum, number, output_source, reflectance_spectrum, source
 
 CYCLES_BLACKBODY_SCALE = 1e-6  # Cycles' Principled Volume: black-body radiance σT⁴/π is scaled by 1e-6
 PHASES = {"HENYEY_GREENSTEIN": "hg", "RAYLEIGH": "rayleigh"}
@@ -55,16 +54,11 @@ class Glow:
 
 
 def _reflectance(value) -> np.ndarray:
-    if isinstance(value, Blackbody):
-        value = colorimetry.xyz_to_rgb(
-            colorimetry.spectrum_to_xyz(spectra.blackbody_of_luminance_one(max(value.temperature, 1.0)).values))
-    return spectra.scaled_from_rgb(np.maximum(value, 0.0)).values
+    return reflectance_spectrum(value).values
 
 
 def _emission(value) -> np.ndarray:
-    if isinstance(value, Blackbody):
-        return spectra.blackbody_of_luminance_one(max(value.temperature, 1.0)).values
-    return spectra.emission_from_rgb(np.maximum(value, 0.0)).values
+    return emission_spectrum(value).values
 
 
 def _density(node, name, owner, notes, weight, has_grid):
