@@ -32,7 +32,7 @@ def test_constant_table_and_gaussian():
 
 
 def test_table_rejects_non_numbers():
-    with pytest.raises(SpectralError, match="'leaf'.*values must be a list of numbers"):
+    with pytest.raises(SpectralError, match="^leaf: the spectrum's values must be a list of numbers"):
         spectra.table([400, 500], ["a", "b"], name="leaf")
 
 
