@@ -31,7 +31,8 @@ the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `geo
 then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`). The
 physics at a point (look-ups, coefficients, phase functions, lights, free paths, the DDA's arithmetic) is the shared
 arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module holds the path's loops
-and state. Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
+and state, and the estimator's arithmetic on them (weight and MIS-ratio updates, contributions, roulette).
+Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
 scene's arrays are borrowed
 (`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
 reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call. The
