@@ -19,7 +19,7 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   is added to the path's. The sub-path's own reservoirs give the next (cascades, no recursion).
 - Next-event estimation at every real scattering vertex with ratio-tracked transmittance (residual
   ratio tracking towards delta lights and on grey paths), combined with phase sampling by MIS for
-  environment, sky and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
+  environment, sky, envmaps and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
 - Thermal emission σ_a·Planck(T) and glow (emission that does not depend on absorption) are collected at every
   tentative collision.
 
