@@ -42,6 +42,15 @@ def test_architecture_names_only_paths_that_exist():
     assert not missing
 
 
+def test_architecture_names_every_module_at_addons_root_and_every_package():
+    """A module added at addon/'s root, or a package anywhere under it, has its place in the architecture."""
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    parts = [path.relative_to(ROOT).as_posix() for path in sorted((ROOT / "addon").glob("*.py"))]
+    parts += [init.parent.relative_to(ROOT).as_posix() + "/" for init in sorted((ROOT / "addon").rglob("*/__init__.py"))]
+    assert "addon/tracer/kernels/" in parts
+    assert not [part for part in parts if part not in repository_paths(text)]
+
+
 @pytest.mark.parametrize("document", DOCS, ids=lambda path: path.relative_to(ROOT).as_posix())
 def test_docs_name_only_paths_that_exist(document):
     assert not missing_paths(document)
