@@ -1,8 +1,8 @@
 """A seeded fuzzer of scene files (issue 14): random mutations of valid scenes (types, magnitudes, nesting,
 keys) either load or are refused with a clear SpectralError, one that starts with the scene-file path of
 what it refuses (docs/scene-format.md, "General rules"); a scene that loads is a valid scene, which the
-tracer writes and reads back unchanged, and renders a small image without NaN. Bounded in time: it mutates
-until BUDGET_SECONDS have passed, each case under a watchdog."""
+tracer writes and reads back unchanged, and renders a small image without NaN. A fixed number of cases
+from a fixed seed (the same ones on every machine), each under a watchdog."""
 
 import copy
 import dataclasses
@@ -10,7 +10,6 @@ import json
 import math
 import re
 import signal
-import time
 
 import numpy as np
 import pytest
@@ -22,7 +21,7 @@ from tests.tracer.conftest import TINY_INDEX_TO_WORLD, tiny_scene_dict
 from tests.tracer.test_scene_io import leaf_paths, set_path
 
 SEED = 14
-BUDGET_SECONDS = 25.0
+CASES = 30  # mutated scenes per run: the same ones on every machine (a time budget reached fewer on a busy one)
 CASE_SECONDS = 30  # one case (load and a 16×16, 1 spp render at most) taking longer is a hang
 
 JUNK = [None, True, False, "", "x", "heigth", [], {}, [[1]], {"type": None}, {"type": "gaussian"}, 0, -1, 1, 0.5,
@@ -165,9 +164,8 @@ def test_mutated_scenes_load_or_are_refused_and_render_without_nan(write_scene, 
     bases = [tiny_scene_dict(), rich_scene_dict()]
     outcomes = {"refused": 0, "rendered": 0}
     previous = signal.signal(signal.SIGALRM, _alarm)
-    deadline = time.perf_counter() + BUDGET_SECONDS
     try:
-        while time.perf_counter() < deadline:
+        for _case in range(CASES):
             data = copy.deepcopy(bases[rng.integers(len(bases))])
             changes = [mutate(rng, data) for _ in range(int(rng.integers(1, 4)))]
             signal.alarm(CASE_SECONDS)
@@ -181,7 +179,7 @@ def test_mutated_scenes_load_or_are_refused_and_render_without_nan(write_scene, 
                 signal.alarm(0)
     finally:
         signal.signal(signal.SIGALRM, previous)
-    assert outcomes["refused"] > 10 and outcomes["rendered"] > 10, outcomes  # both kinds of case were reached
+    assert outcomes["refused"] >= 5 and outcomes["rendered"] >= 5, outcomes  # both kinds of case were reached
 
 
 @pytest.mark.parametrize("message", ["media[0].albedo.spectra[1]: albedo must be within [0, 1], found 1.3 at 550 nm",
