@@ -60,7 +60,8 @@ def render_settings(scene) -> RenderSettings:
     return RenderSettings(spp=s.samples, seed=s.seed, max_depth=s.max_bounces,
                           wavelength_sampling=s.wavelength_sampling, wavelengths_per_path=int(s.wavelengths_per_path),
                           lambda_min=s.lambda_min, lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf,
-                          backend=s.backend)
+                          backend=s.backend, noise_threshold=s.adaptive_threshold if s.use_adaptive_sampling else 0.0,
+                          min_samples=s.adaptive_min_samples)
 
 
 def unsupported_settings(scene) -> list[str]:

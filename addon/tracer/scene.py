@@ -234,6 +234,10 @@ class RenderSettings:
     bands: int = 1  # per-wavelength passes: the λ range split into this many equal bands
     cmf: str = "cie1931"  # "cie1931" | "wyman1" | "wyman3"
     backend: str = "numba"  # "numba" | "numpy"
+    # Adaptive sampling (`adaptive`): a pixel stops once its error is below this (0: every pixel gets `spp`),
+    # after `min_samples` (0: chosen from the threshold).
+    noise_threshold: float = 0.0
+    min_samples: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -505,3 +509,6 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
     checks.whole_within(settings.bands, f"{where}.bands", 1)
     checks.one_of(settings.cmf, f"{where}.cmf", CMFS)
     checks.one_of(settings.backend, f"{where}.backend", BACKENDS)
+    checks.within(checks.number(settings.noise_threshold, f"{where}.noise_threshold"), f"{where}.noise_threshold",
+                  0.0, 1.0)
+    checks.whole_within(settings.min_samples, f"{where}.min_samples", 0)
