@@ -143,9 +143,7 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
                 lights.append(light)
         else:
             media.extend(_object_media(instance, depsgraph, volume_owners, originals, notes))
-    world = export_world(settings_scene.world, notes)
-    if world is not None:
-        lights.append(world)
+    lights.extend(export_world(settings_scene.world, notes))
     warning = notes.warning()
     if warning is not None:
         warnings.append(warning)

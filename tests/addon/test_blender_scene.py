@@ -145,6 +145,7 @@ def test_what_is_not_rendered_is_named_in_one_warning(factory):
     area.data.spread = math.radians(90.0)
     world = factory.world.node_tree
     sky = world.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = "PREETHAM"
     world.links.new(sky.outputs["Color"], world.nodes["Background"].inputs["Color"])
     fog = volume_shader(_cube_material(), "ShaderNodeVolumeScatter", Color=(0.8, 0.8, 0.8), Density=1.0)
     fog.phase = "MIE"
@@ -153,7 +154,7 @@ def test_what_is_not_rendered_is_named_in_one_warning(factory):
     warnings = _export().warnings
     assert len(warnings) == 1
     warning = warnings[0]
-    assert warning.startswith("not rendered: 1 surface object (Plane); 1 World texture (Sky Texture of World 'World'); ")
+    assert warning.startswith("not rendered: 1 surface object (Plane); 1 World texture (Sky Texture of World 'World', Preetham model); ")
     assert "light 'Area': Spread 90° rendered as 180°" in warning
     assert "material 'Material' ▸ Volume Scatter: phase Mie rendered as Henyey–Greenstein" in warning
     assert "material 'Material' ▸ Volume Scatter ▸ Density is driven by 'Noise Texture'" in warning
