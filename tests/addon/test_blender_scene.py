@@ -403,3 +403,38 @@ def test_an_hdri_world_lights_the_volume_as_in_cycles(factory, tmp_path, vector_
     print(result)
     assert result.warnings == []
     assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
+
+
+@pytest.mark.parametrize("model, elevation, rotation, mapped", [
+    ("MULTIPLE_SCATTERING", 15.0, 60.0, False), ("MULTIPLE_SCATTERING", 50.0, 200.0, False),
+    ("SINGLE_SCATTERING", 25.0, 120.0, False), ("MULTIPLE_SCATTERING", 10.0, 60.0, True)],
+    ids=["multiple-15°", "multiple-50°", "single-25°", "multiple-10°-mapped-no-disc"])
+def test_a_sky_texture_lights_the_volume_as_in_cycles(factory, tmp_path, model, elevation, rotation, mapped):
+    """A Sky Texture (Strength 0.1) as the only light of a grey cube: the sky as an envmap and its sun disc as
+    a sun light (`tracer.sky_model`); without the disc, turned by a Mapping node (Point, 100° about Z). A grey
+    medium transports every colour alike, so the sky's colour asks no spectral allowance. Under a single
+    scattering sky the camera looks up from below the cube: Cycles' ground there (below the horizon) is darker
+    than its source gives (`test_sky_texture.py`)."""
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    tree = factory.world.node_tree
+    sky = tree.nodes.new("ShaderNodeTexSky")
+    sky.sky_type, sky.sun_elevation, sky.sun_rotation = model, math.radians(elevation), math.radians(rotation)
+    background = tree.nodes["Background"]
+    tree.links.new(sky.outputs["Color"], background.inputs["Color"])
+    background.inputs["Strength"].default_value = 0.1
+    if mapped:
+        sky.sun_disc = False
+        mapping = tree.nodes.new("ShaderNodeMapping")
+        mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(100.0))
+        tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"], mapping.inputs["Vector"])
+        tree.links.new(mapping.outputs["Vector"], sky.inputs["Vector"])
+    if model == "SINGLE_SCATTERING":  # look up at the cube, the frame all sky (see test_sky_texture.py)
+        camera = bpy.data.objects["Camera"]
+        camera.location.z = -4.0
+        look_at(camera)
+    volume_shader(_cube_material(), Color=(0.8, 0.8, 0.8), Density=1.5, Anisotropy=0.3)
+    assert [light.kind for light in _export().scene.lights] == ["envmap"] + ["sun"] * (not mapped)
+    result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(result)
+    assert result.warnings == []
+    assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
