@@ -7,9 +7,9 @@ spectrum, `tracer.spectra.emission_from_rgb`), or, with an Environment Texture a
 light: the image (equirectangular, nearest texel, at most MAX_MAP_WIDTH wide), each texel's RGB on the
 emission spectra of pure R, G and B, turned by a Mapping node's rotation, importance-sampled. With a Sky
 Texture as its Color, its Nishita models (Single and Multiple Scattering) are evaluated as Cycles evaluates
-them (`tracer.sky_model`): the sky as such an envmap (SKY_MAP_WIDTH wide) and its sun disc as a sun light
-of the disc's irradiance and angular size; Preetham and Hosek / Wilkie skies are named in the render report
-as not rendered.
+them (`tracer.sky_model`), and its Preetham model too: the sky as such an envmap (SKY_MAP_WIDTH wide) and its
+sun disc as a sun light of the disc's irradiance and angular size; a Hosek / Wilkie sky is named in the
+render report as not rendered.
 """
 
 import numpy as np
@@ -112,7 +112,8 @@ def _sky(texture, strength: float, world, owner: str, notes) -> list[Light]:
         model=texture.sky_type, sun_elevation=texture.sun_elevation, sun_rotation=texture.sun_rotation,
         altitude=texture.altitude, air=texture.air_density, aerosol=texture.aerosol_density,
         ozone=texture.ozone_density, sun_disc=texture.sun_disc, sun_size=texture.sun_size,
-        sun_intensity=texture.sun_intensity))
+        sun_intensity=texture.sun_intensity, sun_direction=tuple(texture.sun_direction),
+        turbidity=texture.turbidity))
     to_world = _map_to_world(texture, owner, notes)
     lights = [_rgb_envmap(sky.sky_map(SKY_MAP_WIDTH), to_world, strength, world)]
     sun = radiant_light("sun", spectra.emission_from_rgb(sky.sun_irradiance_rgb()), strength,

@@ -1,5 +1,5 @@
-"""Blender's Sky Texture (its Nishita models) evaluated as Cycles evaluates it: the sky's radiance from the
-node's parameters, for an envmap light (linear Rec.709 texels) and its sun disc for a sun light.
+"""Blender's Sky Texture evaluated as Cycles evaluates it: the sky's radiance from the node's parameters,
+for an envmap light (linear Rec.709 texels), and its sun disc, for a sun light.
 
 Two physical models, both spectral computations of light scattered in Earth's atmosphere seen from an
 altitude, whose radiance Cycles turns into CIE XYZ and then into its linear Rec.709 (negative components
@@ -23,6 +23,12 @@ darkening 1 − 0.6 (1 − √(1 − (α/α₀)²)), shown where the direction i
 single scattering, above the horizontal, below which the sky fades to black by (1 + 2.5 z)³ to z = −0.4).
 Directions are Blender's world directions; the sun lies at elevation e and rotation r towards
 (cos e sin r, cos e cos r, sin e) (rotation 0 is +Y, a quarter turn +X).
+
+And one analytic fit, "PREETHAM" (Preetham, Shirley & Smits 1999): the Perez luminance distribution for Y
+and the chromaticities x, y, each (1 + A e^(B / cos θ)) (1 + C e^(D γ) + E cos² γ) of the view's zenith angle
+θ (held at the horizon below it) and its angle γ to the sun (*Sun Direction*), with coefficients linear in
+the *Turbidity* T, scaled by the zenith values (Y's, 0.06 × the paper's kcd/m², and x's and y's cubic fits in
+the sun's zenith angle), as xyY; no sun disc.
 """
 
 from dataclasses import dataclass
@@ -32,7 +38,7 @@ import numpy as np
 from . import colorimetry
 from .wavelengths import LAMBDA_MIN
 
-MODELS = ("SINGLE_SCATTERING", "MULTIPLE_SCATTERING")
+MODELS = ("SINGLE_SCATTERING", "MULTIPLE_SCATTERING", "PREETHAM")
 TABLE_WIDTH, TABLE_HEIGHT = 512, 256  # Cycles' precomputed sky texture (azimuth × warped elevation)
 MIN_SUN_SIZE = 0.0005  # radians: Cycles clamps the sun's angular diameter to at least this
 LIMB_DARKENING = 0.6
@@ -52,6 +58,8 @@ class SkyParameters:
     sun_disc: bool = True
     sun_size: float = np.radians(0.545)
     sun_intensity: float = 1.0
+    sun_direction: tuple = (0.0, 0.0, 1.0)  # Preetham's sun
+    turbidity: float = 2.2  # Preetham's
 
 
 def _ray_sphere(origin, direction, radius):
@@ -326,6 +334,49 @@ class _Multiple:
         return (self.SUN * transmittance / solid_angle) @ self.TO_XYZ
 
 
+class _Preetham:
+    """The Preetham sky: Perez functions of the view's zenith angle and its angle to the sun, in xyY."""
+
+    # Perez coefficients A–E of Y, x and y: (slope in T, intercept).
+    PEREZ = np.array([[(0.1787, -1.4630), (-0.3554, 0.4275), (-0.0227, 5.3251), (0.1206, -2.5771), (-0.0670, 0.3703)],
+                      [(-0.0193, -0.2592), (-0.0665, 0.0008), (-0.0004, 0.2125), (-0.0641, -0.8989), (-0.0033, 0.0452)],
+                      [(-0.0167, -0.2608), (-0.0950, 0.0092), (-0.0079, 0.2102), (-0.0441, -1.6537), (-0.0109, 0.0529)]])
+    # Zenith chromaticities x and y: rows T², T, 1; columns θs³, θs², θs, 1.
+    ZENITH_X = np.array([[0.00166, -0.00375, 0.00209, 0.0], [-0.02903, 0.06377, -0.03202, 0.00394],
+                         [0.11693, -0.21196, 0.06052, 0.25886]])
+    ZENITH_Y = np.array([[0.00275, -0.00610, 0.00317, 0.0], [-0.04214, 0.08970, -0.04153, 0.00516],
+                         [0.15346, -0.26756, 0.06670, 0.26688]])
+
+    def __init__(self, parameters: SkyParameters):
+        sun = np.asarray(parameters.sun_direction, dtype=np.float64)
+        self.theta, self.phi = np.arccos(np.clip(sun[2], -1.0, 1.0)), np.arctan2(sun[0], sun[1])
+        t = parameters.turbidity
+        self.perez = self.PEREZ[..., 0] * t + self.PEREZ[..., 1]
+        chi = (4.0 / 9.0 - t / 120.0) * (np.pi - 2.0 * self.theta)
+        powers = self.theta ** np.arange(3, -1, -1)
+        zenith = np.array([0.06 * ((4.0453 * t - 4.9710) * np.tan(chi) - 0.2155 * t + 2.4192),
+                           np.array([t * t, t, 1.0]) @ self.ZENITH_X @ powers,
+                           np.array([t * t, t, 1.0]) @ self.ZENITH_Y @ powers])
+        self.zenith = zenith / self._perez(0.0, self.theta)
+
+    def _perez(self, theta, gamma):
+        """(..., 3): the Perez function of Y, x and y."""
+        a, b, c, d, e = (self.perez[:, index] for index in range(5))
+        theta, gamma = np.asarray(theta)[..., None], np.asarray(gamma)[..., None]
+        return (1.0 + a * np.exp(b / np.cos(theta))) * (1.0 + c * np.exp(d * gamma) + e * np.cos(gamma) ** 2)
+
+    def xyz(self, directions):
+        d = np.asarray(directions, dtype=np.float64)
+        theta, phi = np.arccos(np.clip(d[..., 2], -1.0, 1.0)), np.arctan2(d[..., 0], d[..., 1])
+        cos_gamma = (np.sin(self.theta) * np.sin(theta) * np.cos(phi - self.phi)
+                     + np.cos(self.theta) * np.cos(theta))
+        gamma = np.arccos(np.clip(cos_gamma, -1.0, 1.0))
+        luminance, x, y = np.moveaxis(self.zenith * self._perez(np.minimum(theta, 0.5 * np.pi - 0.001), gamma), -1, 0)
+        safe_y = np.where(y != 0.0, y, 1.0)
+        return np.stack([np.where(y != 0.0, x / safe_y * luminance, 0.0), luminance,
+                         np.where((y != 0.0) & (luminance != 0.0), (1.0 - x - y) / safe_y * luminance, 0.0)], axis=-1)
+
+
 def _sun_direction(cos_zenith):
     """The model's sun direction (towards −X) at `cos_zenith`, (..., 3)."""
     cos_zenith = np.asarray(cos_zenith, dtype=np.float64)
@@ -351,7 +402,8 @@ def sun_direction(parameters: SkyParameters) -> np.ndarray:
 
 
 class Sky:
-    """One Sky Texture's tabulated sky and sun disc; `xyz(directions)` is what the node returns, in XYZ."""
+    """One Sky Texture's sky (tabulated, or Preetham's closed form) and sun disc (none for Preetham): the node's
+    output along a direction is `sky_rgb` + `sun_rgb`."""
 
     def __init__(self, parameters: SkyParameters):
         if parameters.model not in MODELS:
@@ -361,12 +413,15 @@ class Sky:
         self.table_rotation = 2.0 * np.pi - rotation  # the lookup's offset of the sun's azimuth
         self.sun = sun_direction(parameters)
         self.single = parameters.model == "SINGLE_SCATTERING"
-        model = _Single(parameters) if self.single else _Multiple(parameters)
-        self.table = model.table(self.elevation)
+        self.preetham = _Preetham(parameters) if parameters.model == "PREETHAM" else None
         self.sun_size = max(parameters.sun_size, MIN_SUN_SIZE)
-        solid_angle = 2.0 * np.pi * (1.0 - np.cos(0.5 * self.sun_size))
-        self.sun_bottom, self.sun_top = (model.sun_xyz(self.elevation + sign * 0.5 * self.sun_size, solid_angle)
-                                         for sign in (-1.0, 1.0))
+        self.sun_bottom = self.sun_top = np.zeros(3)
+        if self.preetham is None:
+            model = _Single(parameters) if self.single else _Multiple(parameters)
+            self.table = model.table(self.elevation)
+            solid_angle = 2.0 * np.pi * (1.0 - np.cos(0.5 * self.sun_size))
+            self.sun_bottom, self.sun_top = (model.sun_xyz(self.elevation + sign * 0.5 * self.sun_size, solid_angle)
+                                             for sign in (-1.0, 1.0))
         if self.single and self.elevation + 0.5 * self.sun_size <= 0.0:  # set: Cycles shows no disc
             self.sun_bottom = self.sun_top = np.zeros(3)
         # Below this elevation the Earth hides the sun (Cycles' altitude unclamped, the multiple model's Earth).
@@ -374,6 +429,8 @@ class Sky:
 
     def sky_xyz(self, directions) -> np.ndarray:
         """(..., 3): the sky without the sun disc along unit world `directions` (..., 3)."""
+        if self.preetham is not None:
+            return self.preetham.xyz(directions)
         d = np.asarray(directions, dtype=np.float64)
         elevation = np.arcsin(np.clip(d[..., 2], -1.0, 1.0))
         u = np.mod((-np.arctan2(d[..., 1], d[..., 0]) - 0.5 * np.pi + self.table_rotation) / (2.0 * np.pi), 1.0)

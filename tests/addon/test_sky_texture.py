@@ -33,6 +33,7 @@ def _sky_world(scene, parameters: SkyParameters):
                                                          parameters.altitude)
     sky.air_density, sky.aerosol_density, sky.ozone_density = parameters.air, parameters.aerosol, parameters.ozone
     sky.sun_size, sky.sun_intensity = parameters.sun_size, parameters.sun_intensity
+    sky.sun_direction, sky.turbidity = parameters.sun_direction, parameters.turbidity
     tree.links.new(sky.outputs["Color"], tree.nodes["Background"].inputs["Color"])
 
 
@@ -71,7 +72,11 @@ def _agree(cycled, modelled):
     SkyParameters("SINGLE_SCATTERING", sun_elevation=math.radians(15.0), sun_rotation=math.radians(60.0)),
     SkyParameters("SINGLE_SCATTERING", sun_elevation=math.radians(45.0), sun_rotation=math.radians(250.0),
                   altitude=500.0, air=0.5, aerosol=2.0, ozone=3.0),
-], ids=["multiple-15°", "multiple-2°-dense", "multiple-past-zenith", "single-15°", "single-45°-thin-air"])
+    SkyParameters("PREETHAM", sun_direction=tuple(np.array([0.3, 0.6, 0.5]) / np.linalg.norm([0.3, 0.6, 0.5]))),
+    SkyParameters("PREETHAM", sun_direction=tuple(np.array([-0.8, 0.1, 0.15]) / np.linalg.norm([-0.8, 0.1, 0.15])),
+                  turbidity=6.0),
+], ids=["multiple-15°", "multiple-2°-dense", "multiple-past-zenith", "single-15°", "single-45°-thin-air",
+        "preetham-40°", "preetham-11°-hazy"])
 def test_the_whole_sky_is_cycles_sky(clean, tmp_path, parameters):
     """Cycles' equirectangular camera, turned to look along +X with +Z up, lays the sky out as an envmap does:
     column u at azimuth π (1 − 2u), row v (from the top) at polar angle π v. Single scattering is compared
