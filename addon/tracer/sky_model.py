@@ -6,8 +6,8 @@ altitude, whose radiance Cycles turns into CIE XYZ and then into its linear Rec.
 clamped to 0):
 
 - "SINGLE_SCATTERING" (Nishita 1993, Blender 2.90's "Nishita"): Rayleigh and Mie (Cornette–Shanks phase, g
-  0.76) single scattering and ozone absorption over 21 wavelengths, 380–780 nm, of a ≈ 5778 K solar
-  irradiance, marched in 32 steps along the view ray with the optical depth to the sun by an 8-node
+  0.76) single scattering and ozone absorption over 21 wavelengths, 380–780 nm, of a 5778 K black-body
+  sun, marched in 32 steps along the view ray with the optical depth to the sun by an 8-node
   Gauss–Laguerre quadrature; XYZ by the CIE 1931 functions summed at those wavelengths × 20 nm.
 - "MULTIPLE_SCATTERING" (García Liñán 2024, Blender 5's default): molecules, aerosols (Henyey–Greenstein g
   0.8) and ozone with measured altitude profiles, single scattering marched in 64 steps with the
@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import colorimetry
+from .planck import planck_radiance
 from .wavelengths import LAMBDA_MIN
 
 MODELS = ("SINGLE_SCATTERING", "MULTIPLE_SCATTERING", "PREETHAM")
@@ -96,13 +97,10 @@ class _Single:
     G = 0.76
     STEPS = 32
     WAVELENGTHS = np.arange(380.0, 781.0, 20.0)
-    # Solar irradiance at the top of the atmosphere (W·m⁻²·nm⁻¹), Rayleigh scattering and ozone absorption
-    # (m⁻¹ at sea level; ozone at its peak density) at WAVELENGTHS.
-    IRRADIANCE = np.array([1.45756829855593, 1.56596305559738, 1.65148449067670, 1.71496242737209, 1.75797983805021,
-                           1.78256407885925, 1.79095108475839, 1.78541550133411, 1.76815554864307, 1.74122069647250,
-                           1.70647127164944, 1.66556087452740, 1.61993437242452, 1.57083597368892, 1.51932335059305,
-                           1.46628494965214, 1.41245852740172, 1.35844961970384, 1.30474913844739, 1.25174963272611,
-                           1.19975998755421])
+    # Solar irradiance at the top of the atmosphere (W·m⁻²·nm⁻¹): Planck's 5778 K over the solid angle the
+    # model gives the sun (its table's values to 3e-7).
+    IRRADIANCE = planck_radiance(WAVELENGTHS, 5778.0) * 6.7901644e-5
+    # Rayleigh scattering and ozone absorption (m⁻¹ at sea level; ozone at its peak density) at WAVELENGTHS.
     RAYLEIGH = np.array([5.424820087636473e-05, 4.418549866505454e-05, 3.635151910165377e-05, 3.017929012024763e-05,
                          2.526320226989157e-05, 2.130859310621843e-05, 1.809838025320633e-05, 1.547057129129042e-05,
                          1.330284977336850e-05, 1.150184784075764e-05, 9.99557429990163e-06, 8.72799973630707e-06,
@@ -130,15 +128,10 @@ class _Single:
         return np.stack([np.exp(-height / self.RAYLEIGH_SCALE), np.exp(-height / self.MIE_SCALE),
                          np.maximum(0.0, 1.0 - np.abs(height - 25e3) / 15e3)], axis=-1)
 
-    def to_atmosphere(self, origin, direction):
-        b = np.sum(origin * direction, axis=-1)
-        c = np.sum(origin * origin, axis=-1) - self.ATMOSPHERE**2
-        return -b + np.sqrt(b * b - c)
-
     def optical_depth(self, origin, direction):
         """(..., 3): the integrals of the relative densities from `origin` along `direction` out of the
         atmosphere (metres)."""
-        length = self.to_atmosphere(origin, direction)
+        length = _ray_sphere(origin, direction, self.ATMOSPHERE)
         points = origin[..., None, :] + (self.NODES[:, None] * direction[..., None, :]) * length[..., None, None]
         height = np.linalg.norm(points, axis=-1) - self.EARTH
         return np.einsum("...nk,n->...k", self.densities(height), self.WEIGHTS) * length[..., None]
@@ -151,7 +144,7 @@ class _Single:
 
     def inscattering(self, directions, sun):
         """(N, 21): the radiance scattered once towards the observer along unit `directions` (N, 3)."""
-        length = self.to_atmosphere(self.origin, directions)
+        length = _ray_sphere(self.origin, directions, self.ATMOSPHERE)
         segment = (length / self.STEPS)[:, None]
         mu = directions @ sun
         g2 = self.G**2
@@ -266,6 +259,7 @@ class _Multiple:
         return np.exp(-depth)
 
     def precompute(self):
+        """Tabulate the transmittance to the sun (the model's 256 × 64 table, read bilinearly)."""
         u = np.arange(self.LUT_WIDTH) / (self.LUT_WIDTH - 1.0)
         v = np.arange(self.LUT_HEIGHT) / (self.LUT_HEIGHT - 1.0)
         self.lut = self.transmittance(2.0 * u[None, :] - 1.0, v[:, None])
