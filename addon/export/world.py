@@ -12,6 +12,8 @@ sun disc as a sun light of the disc's irradiance and angular size; a Hosek / Wil
 render report as not rendered.
 """
 
+from functools import lru_cache
+
 import numpy as np
 from mathutils import Euler
 
@@ -108,17 +110,27 @@ def _sky(texture, strength: float, world, owner: str, notes) -> list[Light]:
         model = texture.bl_rna.properties["sky_type"].enum_items[texture.sky_type].name
         notes.leave_out("World texture", f"{texture.name} of {owner}, {model} model")
         return []
-    sky = Sky(SkyParameters(
+    image, irradiance, sun, sun_size = _evaluated_sky(SkyParameters(
         model=texture.sky_type, sun_elevation=texture.sun_elevation, sun_rotation=texture.sun_rotation,
         altitude=texture.altitude, air=texture.air_density, aerosol=texture.aerosol_density,
         ozone=texture.ozone_density, sun_disc=texture.sun_disc, sun_size=texture.sun_size,
         sun_intensity=texture.sun_intensity, sun_direction=tuple(texture.sun_direction),
         turbidity=texture.turbidity))
     to_world = _map_to_world(texture, owner, notes)
-    lights = [_rgb_envmap(sky.sky_map(SKY_MAP_WIDTH), to_world, strength, world)]
-    sun = radiant_light("sun", spectra.emission_from_rgb(sky.sun_irradiance_rgb()), strength,
-                        direction=to_world @ sky.sun, angle=sky.sun_size, name=f"{world.name} sun")
+    lights = [_rgb_envmap(image, to_world, strength, world)]
+    sun = radiant_light("sun", spectra.emission_from_rgb(irradiance), strength, direction=to_world @ sun,
+                        angle=sun_size, name=f"{world.name} sun")
     return lights if sun is None else [*lights, sun]
+
+
+@lru_cache(maxsize=4)
+def _evaluated_sky(parameters: SkyParameters) -> tuple:
+    """(the sky's envmap texels, read-only; the disc's irradiance RGB; the sun's direction; its angular
+    diameter): a few seconds' work, kept for re-exports of the same sky (the viewport's)."""
+    sky = Sky(parameters)
+    image = sky.sky_map(SKY_MAP_WIDTH)
+    image.flags.writeable = False
+    return image, sky.sun_irradiance_rgb(), sky.sun, sky.sun_size
 
 
 def _background(node, strength: float, world, owner: str, notes) -> list[Light]:
