@@ -37,9 +37,10 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
         ("colour", "Color", "Importance by the color matching functions: least color noise"),
         ("visible", "Visible", "Importance by the eye's sensitivity (pbrt-v4's visible density)"),
         ("light", "Lights", "Importance by the lights' spectra"),
-        ("uniform", "Uniform", "Every wavelength alike (380–700 nm)"),
+        ("uniform", "Uniform", "Every wavelength alike, from Min to Max (360–830 nm by default)"),
         ("d65_rejection", "D65", "Importance by daylight (rejection sampling)"),
-        ("uv", "UV", "Uniform and into the ultraviolet, for fluorescence")])
+        ("uv", "UV", "Uniform from 250 nm to Max, into the ultraviolet (the report's sampler; not needed for "
+                "fluorescence, whose excitation wavelengths are drawn from the dye)")])
     wavelengths_per_path: bpy.props.EnumProperty(
         name="Wavelengths per Path", default=str(DEFAULTS.wavelengths_per_path),
         description="Wavelengths carried by each path",

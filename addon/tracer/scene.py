@@ -1,9 +1,9 @@
 """The in-memory scene: camera, media, lights and render settings as plain dataclasses.
 
 This is what the scene file (`scene_io`, docs/scene-format.md) loads into and what the add-on's
-exporter builds; the kernels never see it directly (`lowering` lowers it to flat arrays).
-Conventions (DESIGN.md): lengths in Blender units, wavelengths in nm, matrices are 4×4 row-major
-NumPy arrays acting on column vectors (world = M @ [x, y, z, 1]).
+exporter builds; the kernels never see it directly (`lowering` lowers it to `KernelScene`, arrays grouped
+by concept). Conventions (docs/architecture.md, "Data flow"): lengths in Blender units, wavelengths in nm,
+matrices are 4×4 row-major NumPy arrays acting on column vectors (world = M @ [x, y, z, 1]).
 
 A scene checks itself, whoever built it: `Scene.validate()` (called by `scene_io.load_scene` and
 `save_scene` and by `lowering.compile_scene`) raises a SpectralError naming the field by its scene-file

@@ -18,7 +18,7 @@ from tests.addon.builders import basic_scene
 bpy = pytest.importorskip("bpy")
 
 ROOT = Path(__file__).resolve().parents[2]
-pytestmark = pytest.mark.slow  # the first render of a process compiles the kernel (about a minute)
+pytestmark = pytest.mark.slow  # the first render compiles the kernel unless cached (minutes: README.md)
 
 
 def _reference(scene):
