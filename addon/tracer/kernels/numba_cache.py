@@ -96,8 +96,11 @@ def kernel_folder(root: Path | None = None, key: dict | None = None) -> Path:
 def _usable_folder() -> Path | None:
     """The current key's folder, created and marked as used where it can be written; None when it neither
     exists nor can be made."""
-    key = cache_key()
-    folder = kernel_folder(key=key)
+    try:
+        key = cache_key()
+        folder = kernel_folder(key=key)
+    except OSError:  # the sources cannot be read to key it
+        return None
     try:
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "key.json").write_text(json.dumps(key, indent=1, sort_keys=True))
