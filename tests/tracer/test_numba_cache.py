@@ -9,6 +9,7 @@ import pickle
 import shutil
 import subprocess
 import threading
+import time
 from pathlib import Path
 
 import numba
@@ -185,13 +186,15 @@ def test_a_read_only_cache_holding_the_kernel_is_read(monkeypatch, tmp_path, wri
 
 
 def waited_for(dispatcher, monkeypatch) -> list[str]:
-    """The notices `ready` gives while `dispatcher(1)` is made ready, from the first poll on."""
+    """The notices `ready` gives while `dispatcher(1)` is made ready, from the first poll on (the helper
+    thread lingers a few polls after it, for `ready` to see whether it compiled)."""
     monkeypatch.setattr(numba_cache, "NOTICE_AFTER_SECONDS", 0.0)
     release, notices = threading.Event(), []
 
     def prepare():
         release.wait()
         dispatcher(1)
+        time.sleep(6 * numba_cache.POLL_SECONDS)
 
     def notice(text):
         notices.append(text)
@@ -241,9 +244,6 @@ def test_ready_raises_what_the_prepare_raised(monkeypatch, tmp_path):
 
 
 def test_key_folders_unused_for_a_month_are_removed(monkeypatch, tmp_path):
-    import os
-    import time
-
     old, recent, unmarked = tmp_path / "kernels-old", tmp_path / "kernels-recent", tmp_path / "kernels-unmarked"
     for folder in (old, recent, unmarked):
         folder.mkdir()
