@@ -13,17 +13,19 @@ so both count in the installed size.
 
 import argparse
 import base64
+import csv
 import fnmatch
 import hashlib
 import importlib.util
+import io
 import json
 import re
-import zipfile
 import shutil
 import subprocess
 import sys
 import tempfile
 import tomllib
+import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -39,9 +41,10 @@ PLATFORM_TAGS = {
 
 
 # Files of the bundled wheels that never run in Blender (patterns on paths inside a wheel; "*": every
-# wheel). Test suites; colour-science's coverage report (78 MB) and examples; the SciPy subpackages that
-# colour-science's RGB → spectrum recovery (`spectra.from_rgb`: SciPy's L-BFGS-B optimiser and grid
-# interpolator) does not import, which the packaging tests check by running it in the installed extension.
+# wheel). Test suites; colour-science's coverage report (78 MB) and examples; the SciPy subpackages nothing
+# imports at run time (the tracer imports scipy.constants; colour-science imports scipy.optimize, for the
+# Jakob 2019 recovery's L-BFGS-B, and scipy.interpolate, and they import the rest kept), which the
+# packaging tests check by recovering spectra and rendering in the installed extension.
 LEFT_OUT = {
     "*": ("*/tests/*", "*/test/*"),
     "colour_science": ("colour/htmlcov/*", "colour/examples/*"),
@@ -67,15 +70,17 @@ def slim_wheel(source: Path, folder: Path) -> Path:
     partial = target.with_suffix(".partial")
     with zipfile.ZipFile(source) as wheel, zipfile.ZipFile(partial, "w", zipfile.ZIP_LZMA) as slim:
         (record,) = [n for n in wheel.namelist() if n.endswith(".dist-info/RECORD")]
-        rows = []
+        rows = io.StringIO()
+        listing = csv.writer(rows, lineterminator="\n")
         for info in wheel.infolist():
             if info.filename == record or left_out(distribution, info.filename):
                 continue
             data = wheel.read(info)
             slim.writestr(info, data, zipfile.ZIP_LZMA)
             digest = base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=").decode()
-            rows.append(f"{info.filename},sha256={digest},{len(data)}\n")
-        slim.writestr(wheel.getinfo(record), "".join(rows) + f"{record},,\n", zipfile.ZIP_LZMA)
+            listing.writerow((info.filename, f"sha256={digest}", len(data)))
+        listing.writerow((record, "", ""))
+        slim.writestr(wheel.getinfo(record), rows.getvalue(), zipfile.ZIP_LZMA)
     partial.replace(target)
     return target
 
