@@ -102,12 +102,17 @@ def wait(cancel=None, notice=None) -> bool:
     kernel, kernels/numba_cache.py's notices, in its log). True when there is nothing (more) to wait for."""
     from .kernels import numba_cache
 
-    log = numba_cache.kernel_folder() / LOG_NAME if running() else None
+    if not running():
+        return True
+    try:
+        log = numba_cache.kernel_folder() / LOG_NAME
+    except OSError:  # the kernel sources cannot be read to name the folder: wait without notices
+        log = None
     told = None
     while running():
         if cancel is not None and cancel():
             return False
-        said = _last_notice(log, numba_cache.NOTICES) if notice is not None else None
+        said = _last_notice(log, numba_cache.NOTICES) if notice is not None and log is not None else None
         if said is not None and said != told:
             notice(said)
             told = said
