@@ -148,17 +148,24 @@ def test_plane_in_a_uniform_environment_reflects_albedo_times_its_radiance():
 
 
 def test_shadow_of_an_occluding_triangle_is_black():
-    """A triangle between a grey plane and an overhead sun: the plane is dark where its shadow falls (no other
-    light reaches it) and ρ E / π elsewhere."""
+    """A black triangle between a grey plane and an overhead sun: the plane is dark where its shadow falls (no
+    other light reaches it: the triangle reflects nothing back) and ρ E / π elsewhere."""
     blocker = Surface("blocker", np.array([[-1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [-1.0, 1.0, 1.0]]),
-                      np.array([[0, 1, 2]]), spectra.constant(0.5))
+                      np.array([[0, 1, 2]]), spectra.constant(0.0))
     scene = s.scene(s.ortho_camera(16, 16, scale=4.0, distance=0.5), [], [s.sun((0, 0, 1), 1.0)],
                     [ground(0.6), blocker], spp=16, seed=4)
-    y = render(scene).film.xyz[..., 1]
-    # Pixel centres at ±(0.125 + 0.25 k): the triangle's shadow covers x + y < 0 inside [-1, 1]².
-    assert y[9, 3] == 0.0 and y[12, 2] == 0.0  # x, y = (-1.125 + 0.25·3, …): inside the shadow
-    lit = y[:, 12:]  # x > 1: outside it
-    assert np.abs(lit - 0.6 / np.pi).max() < 1e-3 * 0.6
+    film = render(scene).film
+    y = film.xyz[..., 1]
+    # Pixel (row, column) is centred at x = −2 + 0.25 (column + ½), y = 2 − 0.25 (row + ½); the shadow covers
+    # x, y ≥ −1 with x + y ≤ 0: rows 4–11, columns 4–11, below the diagonal.
+    rows, columns = np.indices(y.shape)
+    shadow = (rows >= 4) & (rows <= 11) & (columns >= 4) & (rows - columns > 0)
+    assert (y[shadow] == 0.0).all()
+    assert (y[~shadow & ((rows < 3) | (rows > 12) | (columns < 3) | (columns > 12))] > 0.0).all()
+    expected = expected_xyz(0.6 / np.pi)[1]
+    outside = y[:, 13:]  # x > 1.25: beyond the triangle's shadow
+    error = np.sqrt(film.variance[:, 13:, 1].sum()) / outside.size
+    assert abs(outside.mean() - expected) <= 4.0 * error
 
 
 def test_white_emissive_box_furnace():
