@@ -1,6 +1,7 @@
 """Light policies: what a light's `strength` means in its unit (`strength_scale`) and the spectrum the kernels
 take for it (`kernel_spectrum`), how often next-event estimation chooses each light (`selection_powers`,
-which the lowering normalises to `KernelScene.lights.pmf`; an emissive surface's, `surface_power`) and each texel of an envmap (`texel_weights`).
+which the lowering normalises to `KernelScene.lights.pmf`; an emissive surface's, `surface_power`) and each
+texel of an envmap (`texel_weights`).
 """
 
 import numpy as np

@@ -273,7 +273,7 @@ class Scene:
         if not self.lights and not emitters:
             raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, envmap, point, spot "
                                 "or area light (or an emitting medium or surface)")
-        if self.lights and not emitters and not any(light.strength > 0 for light in self.lights):
+        if self.lights and not any(light.strength > 0 for light in self.lights):
             raise SpectralError("lights: every light has strength 0, so nothing is lit")
         return self
 

@@ -43,7 +43,7 @@ from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_ke
 from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
 
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
-CHUNK_PAIRS = 1 << 22  # ray–triangle pairs tested together (`_closest_hits`)
+CHUNK_PAIRS = 1 << 20  # ray–triangle pairs tested together (`_closest_hits`: ~20 arrays of this size)
 INF = np.inf
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_ABSORB = 0, 1, 2
 
@@ -392,7 +392,8 @@ def _arrive_at_surfaces(ks, paths, triangle, distance):
 # ----------------------------------------------------------------------------- transport
 
 def _surface_state(count, n):
-    """A new batch's surface fields: not on a surface (`on_surface`), its normal and reflectance (`_arrive_at_surfaces`)."""
+    """A new batch's surface fields: not on a surface (`on_surface`), its normal and reflectance
+    (`_arrive_at_surfaces`)."""
     return dict(on_surface=np.zeros(count, dtype=bool), normal=np.zeros((count, 3)), reflectance=np.zeros((count, n)))
 
 
@@ -456,9 +457,9 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
 
 
 def _free_flight(ks, paths, radiance, fl, t_max):
-    """Delta tracking of every path to its next real event before t_max (a surface, or INF), collecting emission (thermal, glow) and offering
-    fluorescent sources at each tentative collision and weighting null collisions (spectral MIS ratios
-    included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls instead of
+    """Delta tracking of every path to its next real event before t_max (a surface, or INF), collecting emission
+    (thermal, glow) and offering fluorescent sources at each tentative collision and weighting null collisions
+    (spectral MIS ratios included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls instead of
     putting null-event probabilities into `r_l`, as the Numba kernel's `_free_flight`.
 
     Returns each path's event, the vertex data of scattering events (position q and the per-medium σ_s at
