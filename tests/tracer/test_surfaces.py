@@ -168,6 +168,19 @@ def test_shadow_of_an_occluding_triangle_is_black():
     assert abs(outside.mean() - expected) <= 4.0 * error
 
 
+def test_plane_inside_an_absorbing_medium_is_dimmed_on_the_way_in_and_out():
+    """A plane cutting a purely absorbing box (σ, albedo 0) at depth d below its top, an overhead sun, the camera
+    above the box looking down: the sun's light and the reflected light each cross d of the medium, so
+    L = ρ(λ) E / π · exp(−2 σ(λ) d). The tracking of the camera ray ends at the plane, and the shadow ray and the
+    reflected path start from it, inside the medium's box."""
+    sigma, depth = s.smooth_ramp(1.2, 0.4), 0.35
+    box = s.medium(s.box_grid(cells=(4, 4, 4), size=(6.0, 6.0, 1.0)), extinction=sigma, albedo=0.0)
+    plane = ground(z=0.5 - depth)
+    scene = s.scene(s.ortho_camera(8, 8, scale=1.0, distance=2.0), [box], [s.sun((0, 0, 1), 1.0)], [plane], spp=64,
+                    seed=8)
+    assert_xyz(render(scene).film, ALBEDO.values / np.pi * np.exp(-2.0 * sigma.values * depth))
+
+
 def test_white_emissive_box_furnace():
     """Inside a closed box whose walls emit Le and reflect ρ (both sides), every direction sees the same radiance
     L = Le + ρ L, so L = Le / (1 − ρ): emission hit directly, mesh-light sampling and BRDF sampling combined by
@@ -216,6 +229,20 @@ def test_an_emissive_surface_seen_directly_shows_its_radiance_on_both_sides():
                    dataclasses.replace(s.ortho_camera(4, 4, scale=1.0), to_world=below)):
         scene = s.scene(camera, [], [], [ground(0.0, emission=emission)], spp=16, seed=7)
         assert_xyz(render(scene).film, emission.values)
+
+
+def test_the_light_wavelength_mode_follows_an_emissive_surface():
+    """The `light` wavelength mode's composite includes each emissive surface's emission, with its selection
+    probability."""
+    from addon.tracer.wavelength_modes import light_mode_sources
+
+    emission = s.smooth_ramp(0.1, 2.0)
+    ks = compile_scene(s.scene(s.ortho_camera(), [], [s.sun((0, 0, 1))], [ground(0.5, emission=emission)],
+                               wavelength_sampling="light"))
+    sources = light_mode_sources(ks)
+    assert len(sources) == 2
+    np.testing.assert_array_equal(sources[1][0].values, emission.values)
+    assert sources[1][1] == ks.lights.pmf[1] > 0
 
 
 # ----------------------------------------------------------------------------- the scene's checks
