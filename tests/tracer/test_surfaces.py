@@ -171,8 +171,8 @@ def test_shadow_of_an_occluding_triangle_is_black():
 def test_plane_inside_an_absorbing_medium_is_dimmed_on_the_way_in_and_out():
     """A plane cutting a purely absorbing box (σ, albedo 0) at depth d below its top, an overhead sun, the camera
     above the box looking down: the sun's light and the reflected light each cross d of the medium, so
-    L = ρ(λ) E / π · exp(−2 σ(λ) d). The tracking of the camera ray ends at the plane, and the shadow ray and the
-    reflected path start from it, inside the medium's box."""
+    L = ρ(λ) E / π · exp(−2 σ(λ) d). The tracking of the camera ray ends at the plane, and the shadow ray and
+    the reflected path start from it, inside the medium's box."""
     sigma, depth = s.smooth_ramp(1.2, 0.4), 0.35
     box = s.medium(s.box_grid(cells=(4, 4, 4), size=(6.0, 6.0, 1.0)), extinction=sigma, albedo=0.0)
     plane = ground(z=0.5 - depth)
@@ -312,7 +312,8 @@ def test_surfaces_round_trip_through_the_scene_file(tmp_path):
 def test_surfaces_read_inline_lists_and_obj_files(tmp_path):
     from addon.tracer.scene_io import load_scene
 
-    (tmp_path / "quad.obj").write_text("# a quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 -1\n")
+    (tmp_path / "quad.obj").write_text("# a quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n"
+                                       "f 1/1/1 2/2/1 3/3/1 -1\n")
     data = _scene_with([
         {"name": "inline", "vertices": [[0, 0, 1], [1, 0, 1], [0, 1, 1]], "triangles": [[0, 1, 2]], "reflectance": 0.5,
          "emission": 1.0},
@@ -330,7 +331,8 @@ def test_surfaces_read_inline_lists_and_obj_files(tmp_path):
     ({"vertices": [[0, 0, 0]], "reflectance": 0.5}, r"surfaces\[0\]: missing required field 'triangles'"),
     ({"vertices": [[0, 0]], "triangles": [[0, 0, 0]], "reflectance": 0.5}, r"surfaces\[0\]\.vertices: expected rows"),
     ({"vertices": [[0, 0, "a"]], "triangles": [[0, 0, 0]], "reflectance": 0.5}, r"surfaces\[0\]\.vertices: expected"),
-    ({"vertices": [[0, 0, 0]], "triangles": [[0, 0, 1]], "reflectance": 0.5}, r"surfaces\[0\]\.triangles: vertex index 1"),
+    ({"vertices": [[0, 0, 0]], "triangles": [[0, 0, 1]], "reflectance": 0.5},
+     r"surfaces\[0\]\.triangles: vertex index 1"),
     ({"mesh": "missing.obj", "reflectance": 0.5}, r"surfaces\[0\]\.mesh: the file .* does not exist"),
     ({"mesh": "x.obj", "vertices": [], "reflectance": 0.5}, r"surfaces\[0\]: give either"),
     ({"vertices": [[0, 0, 0]], "triangles": [[0, 0, 0]], "reflectance": 0.5, "colour": 1}, r"unknown field 'colour'"),

@@ -125,8 +125,8 @@ class KernelLights(NamedTuple):
     """The lights (NL): their kind, spectra and geometry, and how next-event estimation selects them."""
 
     kind: np.ndarray
-    # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky; envmap: its mean), intensity (point/spot; area:
-    # along its normal)
+    # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky; envmap: its mean; an emissive surface, LIGHT_MESH),
+    # intensity (point/spot; area: along its normal)
     spd: np.ndarray
     spd_horizon: np.ndarray  # (NL, GRID) sky only
     dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots; the direction an area light emits along
@@ -171,7 +171,7 @@ class KernelSurfaces(NamedTuple):
     of_light: np.ndarray  # (NL,) the surface of each kernel light, -1 for lights that are not surfaces
     area: np.ndarray  # (S,) total area
     emitter_cdf: np.ndarray  # each emissive surface's cdf over its triangles by area, from 0 to 1, back to back
-    emitter_triangle: np.ndarray  # the triangles of those bins, laid out as emitter_cdf (one fewer per surface)
+    emitter_triangle: np.ndarray  # each bin's triangle, at its cdf node's index (each surface's last entry -1)
     emitter_offset: np.ndarray  # (S,) where each surface's cdf starts in emitter_cdf (and its bins in emitter_triangle)
     emitter_count: np.ndarray  # (S,) its number of triangles (0: not emissive)
 

@@ -32,15 +32,14 @@ Structure: `render_tile` runs runs of pixels in parallel (`_render_runs`); `_ren
 (each allocation updates Numba's global counters atomically) and `_render_samples` runs a pixel's samples, each through
 the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `geometry.camera_ray`, then transport
 (`_trace`: `_transport` with `_closest_hit`, `_free_flight`, `_offer_fluorescence`, `_escape`, `_surface_emission`,
-`_next_event`, `_sample_phase` or `_sample_lambert`, `_survives_roulette`; then `_start_fluorescent_branch` for each fluorescent sub-path),
-then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`, `Hit`). The
-physics at a point (look-ups, coefficients, phase functions, lights, free paths, the DDA's arithmetic) is the shared
-arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module holds the path's loops
-and state. Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
-scene's arrays are borrowed
-(`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
-reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call. The
-arrays sit in the scene's nested groups (`layout.KernelScene`), all of which `_borrowed` borrows.
+`_next_event`, `_sample_phase` or `_sample_lambert`, `_survives_roulette`; then `_start_fluorescent_branch` for each
+fluorescent sub-path), then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`,
+`Fluorescent`, `Hit`). The physics at a point (look-ups, coefficients, phase functions, lights, surfaces, free paths,
+the DDA's arithmetic) is the shared arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module
+holds the path's loops and state. Every function below `_render_samples`, shared ones included, is inlined into it,
+and the kernel scene's arrays are borrowed (`_borrowed`): a call that takes the scene costs nothing, where Numba would
+otherwise update the reference count of each of its ~40 arrays (atomic operations that threads contend for) on every
+call. The arrays sit in the scene's nested groups (`layout.KernelScene`), all of which `_borrowed` borrows.
 """
 
 import functools
@@ -815,9 +814,10 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
 
 @jit(inline="always")
 def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, n, path, vertex, tracker, fl):
-    """Delta tracking to the next real event before t_max (a surface; EVENT_ESCAPE there), collecting emission (thermal, glow) and offering fluorescent sources
-    at every tentative collision and weighting null collisions (spectral MIS ratios included). Returns
-    (event, collision point, σ̄ there); `vertex` keeps the coefficients at a scattering collision.
+    """Delta tracking to the next real event before t_max (a surface; EVENT_ESCAPE there), collecting emission
+    (thermal, glow) and offering fluorescent sources at every tentative collision and weighting null collisions
+    (spectral MIS ratios included). Returns (event, collision point, σ̄ there); `vertex` keeps the coefficients
+    at a scattering collision.
 
     With `controls` (a grey path after a scattering vertex, `_is_grey`), light sampling's MIS ratio `r_l`
     takes no null-event probabilities: the controls are integrated instead, and an escaping path's
@@ -1098,13 +1098,14 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
     _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.glow, ks.media, ks.fluorescence, ks.lights,
-                 ks.envmaps, ks.surfaces, ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
-                 sum_xyz, sum_sq)
+                 ks.envmaps, ks.surfaces, ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin,
+                 sample_end, seed, band, sum_xyz, sum_sq)
 
 
 @jit(parallel=True, nogil=True)
 def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
-                 wavelengths, termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+                 wavelengths, termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
+                 sum_xyz, sum_sq):
     """`render_tile`'s runs of pixels, in parallel. The kernel scene comes as its groups, and each run puts
     them together again: Numba's parallel loop hands a tuple to its threads member by member, which fails
     when a member is a tuple itself."""

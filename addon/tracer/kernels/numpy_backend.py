@@ -459,12 +459,12 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
 def _free_flight(ks, paths, radiance, fl, t_max):
     """Delta tracking of every path to its next real event before t_max (a surface, or INF), collecting emission
     (thermal, glow) and offering fluorescent sources at each tentative collision and weighting null collisions
-    (spectral MIS ratios included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls instead of
-    putting null-event probabilities into `r_l`, as the Numba kernel's `_free_flight`.
+    (spectral MIS ratios included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls
+    instead of putting null-event probabilities into `r_l`, as the Numba kernel's `_free_flight`.
 
-    Returns each path's event, the vertex data of scattering events (position q and the per-medium σ_s at
-    q) and each path's survival along its ray as a shadow ray would give it (`_transmittance`; 1 where
-    `r_l` has the null-event probabilities), for `_escape`."""
+    Returns each path's event (EVENT_ESCAPE for one that reaches t_max), the vertex data of scattering events
+    (position q and the per-medium σ_s at q) and each path's survival along its ray as a shadow ray would give it
+    (`_transmittance`; 1 where `r_l` has the null-event probabilities), for `_escape` and `_surface_emission`."""
     count, n = paths.lams.shape
     vertex = _Batch(event=np.full(count, EVENT_ESCAPE, dtype=np.int8), q=np.zeros((count, 3)),
                     medium_s=np.zeros((count, ks.media.density_scale.shape[0], n)), survival=np.ones(count))
