@@ -344,3 +344,12 @@ def test_bad_surfaces_in_the_scene_file_are_refused_naming_the_field(tmp_path, s
     data["lights"] = [{"kind": "sun", "spectrum": 1.0, "direction": [0, 0, 1]}]
     with pytest.raises(SpectralError, match=message):
         load_scene(_write(tmp_path, data))
+
+
+def test_validate_scene_describes_the_surfaces(tmp_path):
+    from addon.tracer.scene_io import save_scene, validate_scene
+
+    scene = s.scene(s.ortho_camera(), [], [], [ground(name="floor"), ground(0.3, z=2.0, emission=1.0, name="lamp")])
+    lines = validate_scene(save_scene(scene, tmp_path))
+    assert "surface 'floor': 32 triangles" in lines
+    assert "surface 'lamp': 32 triangles, emissive" in lines
