@@ -181,11 +181,8 @@ def test_plane_inside_an_absorbing_medium_is_dimmed_on_the_way_in_and_out():
     assert_xyz(render(scene).film, ALBEDO.values / np.pi * np.exp(-2.0 * sigma.values * depth))
 
 
-def test_white_emissive_box_furnace():
-    """Inside a closed box whose walls emit Le and reflect ρ (both sides), every direction sees the same radiance
-    L = Le + ρ L, so L = Le / (1 − ρ): emission hit directly, mesh-light sampling and BRDF sampling combined by
-    MIS, through many bounces."""
-    emission, albedo = 0.3, 0.6
+def _emissive_box(emission, albedo):
+    """The six walls of the cube [−1, 1]³, each emitting `emission` and reflecting `albedo`."""
     walls = []
     for axis in range(3):
         for side in (-1.0, 1.0):
@@ -194,8 +191,31 @@ def test_white_emissive_box_furnace():
             corner[(axis + 1) % 3], corner[(axis + 2) % 3] = -1.0, -1.0
             u[(axis + 1) % 3], v[(axis + 2) % 3] = 2.0, 2.0
             walls.append(s.parallelogram(corner, u, v, 2, reflectance=albedo, emission=emission, name=f"wall{axis}"))
+    return walls
+
+
+def test_white_emissive_box_furnace():
+    """Inside a closed box whose walls emit Le and reflect ρ (both sides), every direction sees the same radiance
+    L = Le + ρ L, so L = Le / (1 − ρ): emission hit directly, mesh-light sampling and BRDF sampling combined by
+    MIS, through many bounces."""
+    emission, albedo = 0.3, 0.6
     camera = s.perspective_camera(8, 8, fov_degrees=60.0, distance=0.0)
-    scene = s.scene(camera, [], [], walls, spp=64, seed=5, max_depth=200, rr_depth=200)
+    scene = s.scene(camera, [], [], _emissive_box(emission, albedo), spp=64, seed=5, max_depth=200, rr_depth=200)
+    assert_xyz(render(scene).film, emission / (1.0 - albedo))
+
+
+@pytest.mark.parametrize("chromatic", [False, True], ids=["grey", "chromatic"])
+def test_emissive_box_furnace_filled_with_a_white_medium(chromatic):
+    """The same box filled (in part) with a medium of albedo 1: in a uniform radiance field a non-absorbing
+    medium changes nothing, so the camera inside it still sees Le / (1 − ρ). Phase sampling and mesh-light
+    sampling are weighed by MIS at every scattering vertex: on a grey medium with the controls' transmittance
+    (residual tracking), on a chromatic one with ratio tracking's null-event probabilities."""
+    emission, albedo = 0.3, 0.6
+    extinction = s.smooth_ramp(3.0, 0.8) if chromatic else 2.0
+    medium = s.medium(s.box_grid(cells=(6, 6, 6), size=(1.6, 1.6, 1.6)), extinction=extinction, albedo=1.0, g=0.4)
+    camera = s.perspective_camera(8, 8, fov_degrees=60.0, distance=0.0)
+    scene = s.scene(camera, [medium], [], _emissive_box(emission, albedo), spp=64, seed=9, max_depth=400,
+                    rr_depth=400)
     assert_xyz(render(scene).film, emission / (1.0 - albedo))
 
 
