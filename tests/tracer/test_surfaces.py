@@ -240,6 +240,18 @@ def test_plane_under_an_emissive_square_sees_its_view_factor(half):
     assert_xyz(render(scene).film, albedo * _square_irradiance(radiance, half, height) / np.pi)
 
 
+def test_plane_under_a_square_area_light_sees_its_view_factor():
+    """A square area light of power P (radiance L = P / (π A) below it) facing a grey plane: the same on-axis
+    irradiance as an emissive square of radiance L, through the area light's own sampler."""
+    half, height, power, albedo = 0.8, 1.0, 5.0, 0.5
+    light = Light(kind="area", spectrum=spectra.constant(1.0), strength=power, unit="radiant",
+                  position=np.array([0.0, 0.0, height]), area_axes=np.eye(3), size_x=2 * half, size_y=2 * half)
+    radiance = power / (np.pi * 4 * half * half) / (GRID[-1] - GRID[0])  # its spectrum integrates to the power
+    camera = s.ortho_camera(8, 8, scale=0.01, distance=0.5 * height)
+    scene = s.scene(camera, [], [light], [ground(albedo)], spp=64, seed=10)
+    assert_xyz(render(scene).film, albedo * _square_irradiance(radiance, half, height) / np.pi)
+
+
 def test_an_emissive_surface_seen_directly_shows_its_radiance_on_both_sides():
     """Camera rays hitting an emitter see its radiance, from above and from below."""
     emission = s.smooth_ramp(0.5, 2.0)
