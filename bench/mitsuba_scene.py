@@ -30,6 +30,10 @@ Conversion facts (each checked by `vs_mitsuba.py --check`, which renders both an
   as `regular` spectra with our 1 nm values (250–830 nm), so the two renderers see identical spectra.
 - Colour: the film is `hdrfilm` with pixel_format "xyz" and a box filter of radius ½ (each sample
   lands in its own pixel, as in our film). Both normalise XYZ so that a constant radiance 1 has Y = 1.
+- Surfaces: each becomes a Mitsuba `Mesh` built in memory with our vertices and triangles (float32 positions),
+  its BSDF `diffuse` with our reflectance as a `regular` spectrum, wrapped in `twosided` (Mitsuba's diffuse
+  reflects on the front side only; ours on both). Emissive surfaces are not converted: Mitsuba's `area`
+  emitter is one-sided, ours two-sided.
 - Depth: Mitsuba counts the camera segment as depth 1 and evaluates lights at a scattering vertex only
   while depth < max_depth, so max_depth = ours + 1; null interfaces do not count in either.
 """
@@ -43,7 +47,7 @@ import numpy as np
 
 from addon.tracer.lights import strength_scale
 from addon.tracer.lowering import camera_extent
-from addon.tracer.scene import Grid, Medium, Scene
+from addon.tracer.scene import Grid, Medium, Scene, Surface
 from addon.tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
 
 BLENDER_TO_MITSUBA_CAMERA = np.diag([-1.0, 1.0, -1.0, 1.0])
@@ -126,6 +130,25 @@ def light_dict(light) -> dict:
     raise ValueError(f"light kind {light.kind!r} is not converted")
 
 
+def surface_mesh(mi, surface: Surface):
+    """A Mitsuba mesh of `surface` with a two-sided diffuse BSDF of its reflectance (see the module docstring)."""
+    if surface.emission is not None:
+        raise ValueError(f"surface {surface.name!r}: emissive surfaces are not converted (Mitsuba's area emitter is "
+                         "one-sided)")
+    vertices = np.asarray(surface.vertices, dtype=np.float32)
+    triangles = np.asarray(surface.triangles, dtype=np.uint32)
+    props = mi.Properties()
+    props["bsdf"] = mi.load_dict({"type": "twosided", "material": {
+        "type": "diffuse", "reflectance": spectrum_dict(surface.reflectance.values)}})
+    mesh = mi.Mesh(surface.name, vertex_count=len(vertices), face_count=len(triangles), props=props,
+                   has_vertex_normals=False, has_vertex_texcoords=False)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float(vertices.ravel())
+    params["faces"] = mi.UInt(triangles.ravel())
+    params.update()
+    return mesh
+
+
 def scene_dict(mi, scene: Scene, integrator: str | None = None, spp: int = 1) -> dict:
     """The Mitsuba scene dictionary of `scene` (see the module docstring), rendered with `integrator`
     (default: `integrator_for(scene)`); `mi` is the mitsuba module from `load_mitsuba`."""
@@ -153,6 +176,8 @@ def scene_dict(mi, scene: Scene, integrator: str | None = None, spp: int = 1) ->
         result[f"medium_{index}"] = medium_dicts(mi, medium, f"medium_{index}")
     for index, light in enumerate(scene.lights):
         result[f"light_{index}_{light.kind}"] = light_dict(light)
+    for index, surface in enumerate(scene.surfaces):
+        result[f"surface_{index}"] = surface_mesh(mi, surface)
     return result
 
 

@@ -1,5 +1,6 @@
 """Building blocks for tracer scenes written in code: grids sampled from a field, media whose optics are
-numbers or spectra, suns, environments, envmaps, cameras and smooth spectra.
+numbers or spectra, surfaces (a subdivided parallelogram), suns, environments, envmaps, cameras and smooth
+spectra.
 
 The demos (demo_blends/scenes.py), the tests (tests/support/scenes.py) and the benchmarks
 (bench/scenes.py) build their scenes with these, so a scene written in Python reads the same everywhere.
@@ -9,7 +10,7 @@ World conventions are Blender's: z up, lengths in Blender units, cameras looking
 import numpy as np
 
 from . import spectra
-from .scene import Camera, Grid, Light, Medium, RenderSettings, Scene, look_at
+from .scene import Camera, Grid, Light, Medium, RenderSettings, Scene, Surface, look_at
 from .wavelengths import GRID
 
 
@@ -56,6 +57,22 @@ def medium(density: Grid, scale: float = 1.0, *, name: str = "medium", extinctio
                   glow=glow)
 
 
+def parallelogram(corner, edge_u, edge_v, subdivisions: int = 1, *, reflectance=1.0, emission=None,
+                  name: str = "surface") -> Surface:
+    """A flat surface spanning corner + a·edge_u + b·edge_v for a, b in [0, 1], cut into `subdivisions`² cells
+    of two triangles each; `reflectance` and `emission` (None: not a light) are numbers or spectra."""
+    n = int(subdivisions)
+    a, b = np.meshgrid(np.linspace(0.0, 1.0, n + 1), np.linspace(0.0, 1.0, n + 1), indexing="ij")
+    vertices = (np.asarray(corner, dtype=np.float64) + a.reshape(-1, 1) * np.asarray(edge_u, dtype=np.float64)
+                + b.reshape(-1, 1) * np.asarray(edge_v, dtype=np.float64))
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    first = (i * (n + 1) + j).ravel()
+    triangles = np.concatenate([np.stack([first, first + n + 1, first + n + 2], axis=1),
+                                np.stack([first, first + n + 2, first + 1], axis=1)])
+    return Surface(name=name, vertices=vertices, triangles=triangles, reflectance=as_spectrum(reflectance),
+                   emission=None if emission is None else as_spectrum(emission))
+
+
 def direction(elevation: float, azimuth: float = 0.0) -> np.ndarray:
     """Unit vector `elevation` degrees above the horizon, `azimuth` degrees from +y towards +x."""
     e, a = np.radians(elevation), np.radians(azimuth)
@@ -89,9 +106,10 @@ def perspective(eye, target, width: int, height: int, fov_degrees: float) -> Cam
     return Camera(to_world=look_at(eye, target), width=width, height=height, fov=np.radians(fov_degrees))
 
 
-def scene(camera: Camera, media=(), lights=(), **settings) -> Scene:
+def scene(camera: Camera, media=(), lights=(), surfaces=(), **settings) -> Scene:
     """A Scene; `settings` are RenderSettings fields (spp, seed, …)."""
-    return Scene(camera=camera, media=tuple(media), lights=tuple(lights), settings=RenderSettings(**settings))
+    return Scene(camera=camera, media=tuple(media), lights=tuple(lights), surfaces=tuple(surfaces),
+                 settings=RenderSettings(**settings))
 
 
 def smooth_ramp(lo_value: float, hi_value: float, lo_nm: float = 360.0, hi_nm: float = 830.0) -> spectra.Spectrum:

@@ -1,6 +1,7 @@
 """Light policies: what a light's `strength` means in its unit (`strength_scale`) and the spectrum the kernels
 take for it (`kernel_spectrum`), how often next-event estimation chooses each light (`selection_powers`,
-which the lowering normalises to `KernelScene.lights.pmf`) and each texel of an envmap (`texel_weights`).
+which the lowering normalises to `KernelScene.lights.pmf`; an emissive surface's, `surface_power`) and each
+texel of an envmap (`texel_weights`).
 """
 
 import numpy as np
@@ -79,6 +80,15 @@ def selection_powers(lights: tuple[Light, ...], spds: np.ndarray, media: tuple[M
             solid_angle = np.pi if light.kind == "area" else 4.0 * np.pi
             power[index] = solid_angle * luminance / distance**2
     return power
+
+
+def surface_power(emission: np.ndarray, area: float, centre: np.ndarray, media: tuple[Medium, ...], cmf: str) -> float:
+    """An emissive surface's selection power, as `selection_powers` gives an area light's: the proxy luminance
+    of its power, 2π L A for radiance L leaving both sides of area A, over the squared distance from its
+    centre to the media's centre (at least their bounding radius)."""
+    media_centre, radius = _scene_centre_and_radius(media)
+    distance = max(np.linalg.norm(centre - media_centre), radius, 1e-3)
+    return 2.0 * np.pi * proxy_luminance(emission, cmf) * area / distance**2
 
 
 def texel_weights(light: Light, cmf: str) -> np.ndarray:

@@ -8,13 +8,14 @@ the same `KernelScene`, so they cannot disagree about the scene.
 
 import numpy as np
 
-from . import colorimetry, envmaps, sampling
+from . import bvh, colorimetry, envmaps, sampling
 from .errors import SpectralError
 from .glow import normalisation_table
 from .kernels.layout import (
     AREA_SHAPES,
     CAMERA_KINDS,
     LIGHT_KINDS,
+    LIGHT_MESH,
     PHASES,
     KernelCamera,
     KernelDensity,
@@ -25,14 +26,15 @@ from .kernels.layout import (
     KernelMajorant,
     KernelMedia,
     KernelScene,
+    KernelSurfaces,
     KernelTemperature,
     KernelTermination,
     KernelWavelengths,
 )
 from .kernels.media import attenuation
-from .lights import kernel_spectrum, selection_powers, texel_weights
+from .lights import kernel_spectrum, selection_powers, surface_power, texel_weights
 from .majorant import block_size_for, glow_floor, majorant_grid, minorant_grid
-from .scene import Grid, Light, Medium, Scene
+from .scene import Grid, Light, Medium, Scene, Surface
 from .wavelength_modes import default_band, with_band
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
@@ -205,6 +207,94 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
     return KernelLights(**out)
 
 
+def _triangles(surfaces: tuple[Surface, ...]):
+    """Every surface's triangles of non-zero area, back to back: (corner, edge1, edge2, cross, owner), cross
+    being edge1 × edge2 (twice the area along the normal) and owner each triangle's surface."""
+    parts = []
+    for index, surface in enumerate(surfaces):
+        vertices = np.asarray(surface.vertices, dtype=np.float64)
+        triangles = np.asarray(surface.triangles, dtype=np.int64)
+        corner = vertices[triangles[:, 0]]
+        edge1, edge2 = vertices[triangles[:, 1]] - corner, vertices[triangles[:, 2]] - corner
+        cross = np.cross(edge1, edge2)
+        keep = np.linalg.norm(cross, axis=1) > 0.0
+        parts.append((corner[keep], edge1[keep], edge2[keep], cross[keep], np.full(keep.sum(), index, np.int64)))
+    if not parts:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int64)
+    return tuple(np.concatenate(columns) for columns in zip(*parts))
+
+
+def _surface_arrays(surfaces: tuple[Surface, ...], first_light: int) -> tuple[KernelSurfaces, list[int]]:
+    """The surfaces' triangles in the order of their hierarchy (`bvh.build`) with its nodes, their spectra,
+    and the emissive surfaces' triangle distributions, each emissive surface (of some area and emission)
+    being kernel light `first_light`, `first_light` + 1, ... in turn; and the list of those surfaces."""
+    corner, edge1, edge2, cross, owner = _triangles(surfaces)
+    count = len(surfaces)
+    bounds, first, node_count = np.zeros((0, 6)), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    if owner.size:
+        points = np.stack([corner, corner + edge1, corner + edge2])
+        order, bounds, first, node_count = bvh.build(points.min(axis=0), points.max(axis=0))
+        corner, edge1, edge2, cross, owner = corner[order], edge1[order], edge2[order], cross[order], owner[order]
+    double_area = np.linalg.norm(cross, axis=1)
+    area = 0.5 * np.bincount(owner, weights=double_area, minlength=count)
+    light = np.full(count, -1, dtype=np.int64)
+    emitter_offset, emitter_count = np.zeros(count, np.int64), np.zeros(count, np.int64)
+    cdfs, bins, emissive = [np.zeros(0)], [np.zeros(0, np.int64)], []
+    for index, surface in enumerate(surfaces):
+        if surface.emission is None or not surface.emission.values.any() or not area[index] > 0:
+            continue
+        triangles = np.flatnonzero(owner == index)
+        cdf = np.concatenate([[0.0], np.cumsum(double_area[triangles])])
+        cdf = cdf / cdf[-1]
+        cdf[-1] = 1.0
+        emitter_offset[index], emitter_count[index] = sum(map(len, cdfs)), triangles.size
+        cdfs.append(cdf)
+        bins.append(np.append(triangles, -1))  # laid out as the cdf: one more entry than bins
+        light[index] = first_light + len(emissive)
+        emissive.append(index)
+    of_light = np.full(first_light + len(emissive), -1, dtype=np.int64)
+    of_light[first_light:] = emissive
+    reflectance = np.array([surface.reflectance.values for surface in surfaces]).reshape(count, GRID.size)
+    kernel_surfaces = KernelSurfaces(
+        corner=corner, edge1=edge1, edge2=edge2,
+        normal=cross / np.maximum(double_area, np.finfo(np.float64).tiny)[:, None], surface=owner,
+        node_bounds=bounds, node_first=first.astype(np.int64), node_count=node_count.astype(np.int64),
+        reflectance=reflectance, light=light, of_light=of_light, area=area,
+        emitter_cdf=np.concatenate(cdfs), emitter_triangle=np.concatenate(bins), emitter_offset=emitter_offset,
+        emitter_count=emitter_count)
+    return kernel_surfaces, emissive
+
+
+def _with_surface_lights(lights: KernelLights, surfaces: tuple[Surface, ...], emissive: list[int],
+                         kernel_surfaces: KernelSurfaces, media: tuple[Medium, ...], cmf: str) -> KernelLights:
+    """The kernel lights followed by one LIGHT_MESH light per emissive surface (its spectrum the radiance
+    leaving it), the selection probabilities renormalised over them all."""
+    if not emissive:
+        return lights
+    spd = np.array([surfaces[index].emission.values for index in emissive])
+    centres = []
+    for index in emissive:
+        mine = kernel_surfaces.surface == index
+        weights = np.linalg.norm(np.cross(kernel_surfaces.edge1[mine], kernel_surfaces.edge2[mine]), axis=1)
+        centroids = kernel_surfaces.corner[mine] + (kernel_surfaces.edge1[mine] + kernel_surfaces.edge2[mine]) / 3.0
+        centres.append(weights @ centroids / weights.sum())
+    power = np.concatenate([lights.power, [surface_power(values, kernel_surfaces.area[index], centre, media, cmf)
+                                           for values, index, centre in zip(spd, emissive, centres)]])
+    extra = len(emissive)
+    return KernelLights(
+        kind=np.concatenate([lights.kind, np.full(extra, LIGHT_MESH, np.int64)]),
+        spd=np.concatenate([lights.spd, spd]),
+        spd_horizon=np.concatenate([lights.spd_horizon, np.zeros((extra, GRID.size))]),
+        dir=np.concatenate([lights.dir, np.zeros((extra, 3))]),
+        pos=np.concatenate([lights.pos, np.array(centres)]),
+        area_span=np.concatenate([lights.area_span, np.zeros((extra, 2, 3))]),
+        area_shape=np.concatenate([lights.area_shape, np.zeros(extra, np.int64)]),
+        cos=np.concatenate([lights.cos, np.ones(extra)]),
+        smooth=np.concatenate([lights.smooth, np.zeros(extra)]),
+        pmf=power / power.sum() if power.sum() > 0 else power,
+        power=power)
+
+
 def _envmap_arrays(lights: tuple[Light, ...], cmf: str) -> KernelEnvmaps:
     """The envmap lights' maps, bases, rotations and cdfs back to back (`KernelEnvmaps`; other lights have none)."""
     count = len(lights)
@@ -247,6 +337,8 @@ def compile_scene(scene: Scene) -> KernelScene:
     `wavelength_modes.with_band` restricts it to one band."""
     settings = scene.validate().settings
     camera = scene.camera
+    lights = _light_arrays(scene.lights, scene.media, settings.cmf)
+    surfaces, emissive = _surface_arrays(scene.surfaces, len(scene.lights))
     kernel_scene = KernelScene(
         camera=KernelCamera(
             to_world=np.asarray(camera.to_world, dtype=np.float64),
@@ -256,8 +348,9 @@ def compile_scene(scene: Scene) -> KernelScene:
             extent=camera_extent(camera),
         ),
         **_media_arrays(scene.media, settings.cmf),
-        lights=_light_arrays(scene.lights, scene.media, settings.cmf),
+        lights=_with_surface_lights(lights, scene.surfaces, emissive, surfaces, scene.media, settings.cmf),
         envmaps=_envmap_arrays(scene.lights, settings.cmf),
+        surfaces=surfaces,
         wavelengths=KernelWavelengths(
             cdf=np.zeros(GRID.size),
             pdf=np.zeros(GRID.size - 1),

@@ -188,6 +188,21 @@ class Light:
 
 
 @dataclass(frozen=True, eq=False)
+class Surface:
+    """An opaque triangle mesh in world space: a Lambertian reflector on both sides, and optionally an
+    emitter (a mesh light). `reflectance` is the albedo ρ(λ) in [0, 1], the BRDF ρ/π; `emission` the
+    radiance leaving both sides in W·m⁻²·sr⁻¹·nm⁻¹ (Cycles' Emission shader on a mesh is two-sided), None
+    for a surface that is not a light. Triangles of zero area (repeated or collinear corners) are allowed
+    and ignored: they are never hit and emit nothing."""
+
+    name: str
+    vertices: np.ndarray  # (V, 3) float64, world space
+    triangles: np.ndarray  # (T, 3) integer indices into vertices
+    reflectance: Spectrum  # Lambertian albedo over the wavelength grid, in [0, 1]
+    emission: Spectrum | None = None  # radiance leaving both sides, None: not a light
+
+
+@dataclass(frozen=True, eq=False)
 class Camera:
     """Blender's camera model: looks down its local -Z with +Y up; `to_world` is its world matrix.
     `fov` (radians, perspective) or `ortho_scale` (orthographic) spans the `sensor_fit` axis
@@ -245,6 +260,7 @@ class Scene:
     camera: Camera
     media: tuple[Medium, ...] = ()
     lights: tuple[Light, ...] = ()
+    surfaces: tuple[Surface, ...] = ()
     settings: RenderSettings = field(default_factory=RenderSettings)
 
     def validate(self) -> "Scene":
@@ -255,9 +271,12 @@ class Scene:
             _check_medium(medium, f"media[{index}]")
         for index, light in enumerate(self.lights):
             _check_light(light, f"lights[{index}]", self.settings.cmf)
-        if not self.lights and not any(medium.emits() for medium in self.media):
+        for index, surface in enumerate(self.surfaces):
+            _check_surface(surface, f"surfaces[{index}]")
+        emitters = any(medium.emits() for medium in self.media) or any(s.emission is not None for s in self.surfaces)
+        if not self.lights and not emitters:
             raise SpectralError("lights: the scene has no lights: add a sun, environment, sky, envmap, point, spot "
-                                "or area light (or an emitting medium)")
+                                "or area light (or an emitting medium or surface)")
         if self.lights and not any(light.strength > 0 for light in self.lights):
             raise SpectralError("lights: every light has strength 0, so nothing is lit")
         return self
@@ -307,6 +326,35 @@ def _check_medium(medium: Medium, where: str) -> None:
             raise SpectralError(f"{where}.glow: a medium has one temperature, so it takes either \"emission\" "
                                 "(thermal) or \"glow\", not both")
         _check_glow(medium.glow, f"{where}.glow")
+
+
+def _check_surface(surface: Surface, where: str) -> None:
+    if not isinstance(surface.name, str):
+        raise SpectralError(f"{where}.name: expected a string, found {checks.shown(surface.name)}")
+    vertices = _float_array(lambda: surface.vertices, f"{where}.vertices")
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise SpectralError(f"{where}.vertices: expected a list of [x, y, z] points, found an array of shape "
+                            f"{vertices.shape}")
+    finite = np.isfinite(vertices)
+    if not finite.all():
+        at = tuple(int(i) for i in np.argwhere(~finite)[0])
+        raise SpectralError(f"{where}.vertices: must be finite, found {vertices[at]:g} at index {list(at)}")
+    triangles = np.asarray(surface.triangles)
+    if triangles.ndim != 2 or triangles.shape[1] != 3 or triangles.shape[0] == 0:
+        raise SpectralError(f"{where}.triangles: expected a non-empty list of [i, j, k] vertex indices, found an "
+                            f"array of shape {triangles.shape}")
+    if not np.issubdtype(triangles.dtype, np.integer):
+        raise SpectralError(f"{where}.triangles: expected whole numbers (vertex indices), found {triangles.dtype}")
+    outside = (triangles < 0) | (triangles >= vertices.shape[0])
+    if outside.any():
+        at = tuple(int(i) for i in np.argwhere(outside)[0])
+        raise SpectralError(f"{where}.triangles: vertex index {int(triangles[at])} at {list(at)} is outside the "
+                            f"{vertices.shape[0]} vertices (indices count from 0)")
+    checks.spectrum_within(surface.reflectance.values, f"{where}.reflectance", "a reflectance must be within [0, 1]",
+                           0.0, 1.0)
+    if surface.emission is not None:
+        checks.spectrum_within(surface.emission.values, f"{where}.emission", "an emission must not be negative",
+                               0.0, np.inf)
 
 
 def optical_depth(medium: Medium) -> float:

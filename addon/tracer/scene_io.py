@@ -17,7 +17,7 @@ from .errors import SpectralError
 from .film import check_film_memory, film_bytes
 from .grids import affine_matrix, load_grid, save_grid_npy
 from .scene import (LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
-                    RenderSettings, Scene)
+                    RenderSettings, Scene, Surface)
 from .spectra import Spectrum
 from .wavelengths import GRID
 
@@ -25,7 +25,7 @@ FORMAT = "spectral-volume-scene"
 VERSION = 1
 SCENE_FILE = "scene.json"
 
-_TOP = {"required": ("format", "version", "camera"), "optional": ("media", "lights", "render")}
+_TOP = {"required": ("format", "version", "camera"), "optional": ("media", "lights", "surfaces", "render")}
 _CAMERA = {
     "required": ("to_world", "width", "height"),
     "optional": ("kind", "fov", "ortho_scale", "sensor_fit", "shift_x", "shift_y", "pixel_aspect"),
@@ -52,6 +52,7 @@ _LIGHT_FIELDS = {
     "envmap": {"required": ("image", "basis"), "optional": ("to_world",)},
 }
 _ENVMAP_UNIT = "radiant"  # an envmap's only unit (its strength multiplies its map), so the file may omit it
+_SURFACE = {"required": ("reflectance",), "optional": ("name", "vertices", "triangles", "mesh", "emission")}
 _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettings))}
 
 
@@ -73,7 +74,10 @@ def load_scene(path) -> Scene:
     camera = _camera(data["camera"], "camera")
     media = tuple(_medium(spec, f"media[{i}]", folder) for i, spec in enumerate(_list(data.get("media", []), "media")))
     lights = tuple(_light(spec, f"lights[{i}]", folder) for i, spec in enumerate(_list(data.get("lights", []), "lights")))
-    scene = Scene(camera=camera, media=media, lights=lights, settings=_render(data.get("render", {}), "render"))
+    surfaces = tuple(_surface(spec, f"surfaces[{i}]", folder)
+                     for i, spec in enumerate(_list(data.get("surfaces", []), "surfaces")))
+    scene = Scene(camera=camera, media=media, lights=lights, surfaces=surfaces,
+                  settings=_render(data.get("render", {}), "render"))
     return scene.validate()
 
 
@@ -267,9 +271,84 @@ def _light(value, where: str, folder: Path) -> Light:
                  name=data.get("name", ""), unit=unit, **fields)
 
 
+def _surface(value, where: str, folder: Path) -> Surface:
+    """A surface: its triangles as `vertices` and `triangles` (inline lists or `.npy` files), or as a `mesh`
+    (an OBJ file); `Scene.validate` checks the values."""
+    data = _fields(value, where, _SURFACE)
+    if "mesh" in data:
+        if "vertices" in data or "triangles" in data:
+            raise SpectralError(f"{where}: give either \"mesh\" or \"vertices\" and \"triangles\", not both")
+        vertices, triangles = _obj(data["mesh"], f"{where}.mesh", folder)
+    else:
+        for key in ("vertices", "triangles"):
+            if key not in data:
+                raise SpectralError(f"{where}: missing required field {key!r} (or give a \"mesh\" file)")
+        vertices = _mesh_array(data["vertices"], f"{where}.vertices", folder)
+        triangles = _mesh_array(data["triangles"], f"{where}.triangles", folder)
+    emission = data.get("emission")
+    name = data.get("name", where)
+    if not isinstance(name, str):
+        raise SpectralError(f"{where}.name: expected a string, found {shown(name)}")
+    return Surface(name=name, vertices=vertices, triangles=triangles,
+                   reflectance=_spectrum(data["reflectance"], f"{where}.reflectance", folder),
+                   emission=None if emission is None else _spectrum(emission, f"{where}.emission", folder))
+
+
+def _mesh_array(value, where: str, folder: Path) -> np.ndarray:
+    """A list of rows of 3 numbers, inline or as a `.npy` file named relative to the scene's folder."""
+    if isinstance(value, str):
+        array = _image(value, where, folder)
+    else:
+        rows = _list(value, where)
+        if any(isinstance(item, bool) for row in rows if isinstance(row, list) for item in row):
+            raise SpectralError(f"{where}: expected rows of 3 numbers, found a boolean")
+        try:
+            array = np.array(rows)
+        except (TypeError, ValueError):
+            array = None
+        if array is None or array.dtype == object or not (np.issubdtype(array.dtype, np.number) or array.size == 0):
+            raise SpectralError(f"{where}: expected rows of 3 numbers, found {shown(value)}")
+        array = array.reshape(-1, 3) if array.size == 0 else array
+    if array.ndim != 2 or array.shape[1] != 3:
+        raise SpectralError(f"{where}: expected rows of 3 numbers, found an array of shape {array.shape}")
+    return array
+
+
+def _obj(value, where: str, folder: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, triangles) of a Wavefront OBJ file named relative to the scene's folder: its `v` lines and its
+    `f` lines (polygons cut into fans of triangles; indices from 1, negative ones counting back from the last
+    vertex so far; texture and normal indices ignored). Other lines are ignored."""
+    if not isinstance(value, str) or not value:
+        raise SpectralError(f"{where}: expected the name of an OBJ file, found {shown(value)}")
+    path = folder / value
+    try:
+        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    except FileNotFoundError:
+        raise SpectralError(f"{where}: the file {path} does not exist") from None
+    except OSError as problem:
+        raise SpectralError(f"{where}: the file {path} cannot be read: {problem}") from None
+    vertices, triangles = [], []
+    for number, line in enumerate(lines, 1):
+        words = line.split()
+        try:
+            if words[:1] == ["v"]:
+                vertices.append([float(word) for word in words[1:4]])
+                if len(vertices[-1]) != 3:
+                    raise ValueError("a vertex needs 3 coordinates")
+            elif words[:1] == ["f"]:
+                corners = [int(word.split("/")[0]) for word in words[1:]]
+                if len(corners) < 3:
+                    raise ValueError("a face needs 3 corners or more")
+                corners = [c - 1 if c > 0 else len(vertices) + c for c in corners]
+                triangles += [[corners[0], corners[i], corners[i + 1]] for i in range(1, len(corners) - 1)]
+        except ValueError as problem:
+            raise SpectralError(f"{where}: {path} line {number}: {problem}") from None
+    return np.array(vertices, dtype=np.float64).reshape(-1, 3), np.array(triangles, dtype=np.int64).reshape(-1, 3)
+
+
 def _image(value, where: str, folder: Path) -> np.ndarray:
-    """An envmap's image: a `.npy` file of shape (H, W, 3), named relative to the scene's folder (`Scene.validate`
-    checks its values)."""
+    """A `.npy` file named relative to the scene's folder: an envmap's image of shape (H, W, 3), a surface's
+    vertices or triangles (`Scene.validate` checks their values)."""
     if not isinstance(value, str):
         raise SpectralError(f"{where}: expected the name of a .npy file, found {shown(value)}")
     path = folder / value
@@ -345,6 +424,7 @@ def save_scene(scene: Scene, folder) -> Path:
         "camera": _camera_json(scene.camera),
         "media": [_medium_json(medium, i, folder) for i, medium in enumerate(scene.media)],
         "lights": [_light_json(light, i, folder) for i, light in enumerate(scene.lights)],
+        "surfaces": [_surface_json(surface, i, folder) for i, surface in enumerate(scene.surfaces)],
         "render": {key: getattr(scene.settings, key) for key in _RENDER["optional"]},
     }
     path = folder / SCENE_FILE
@@ -453,6 +533,16 @@ def _light_json(light: Light, index: int, folder: Path) -> dict:
     return data
 
 
+def _surface_json(surface: Surface, index: int, folder: Path) -> dict:
+    data = {"name": surface.name, "vertices": f"surfaces{index}_vertices.npy",
+            "triangles": f"surfaces{index}_triangles.npy", "reflectance": _spectrum_json(surface.reflectance)}
+    np.save(folder / data["vertices"], np.asarray(surface.vertices, dtype=np.float64), allow_pickle=False)
+    np.save(folder / data["triangles"], np.asarray(surface.triangles, dtype=np.int64), allow_pickle=False)
+    if surface.emission is not None:
+        data["emission"] = _spectrum_json(surface.emission)
+    return data
+
+
 def _floats(array) -> list:
     return np.asarray(array, dtype=np.float64).tolist()
 
@@ -489,6 +579,8 @@ def validate_scene(path) -> list[str]:
     ]
     lines += [_describe_medium(medium) for medium in scene.media]
     lines += [_describe_light(light) for light in scene.lights]
+    lines += [f"surface {surface.name!r}: {len(surface.triangles)} triangles"
+              + (", emissive" if surface.emission is not None else "") for surface in scene.surfaces]
     s = scene.settings
     lines.append(
         f"render: {s.spp} spp, seed {s.seed}, max depth {s.max_depth}, {s.lambda_min:g}–{s.lambda_max:g} nm "

@@ -73,7 +73,7 @@ def _scene(anisotropy, fluorescent=False, band_range=(360.0, 830.0)):
     sun = Light("sun", spectra.illuminant("D65"), strength=3.0, direction=np.array([0, 0, 1.0]), name="Sun")
     world = Light("environment", spectra.constant(1.0), strength=0.5, name="World")
     settings = RenderSettings(lambda_min=band_range[0], lambda_max=band_range[1])
-    return Scene(Camera(np.eye(4), 8, 6), (medium,), (sun, world), settings)
+    return Scene(Camera(np.eye(4), 8, 6), (medium,), (sun, world), settings=settings)
 
 
 def test_plan_of_a_scene():

@@ -4,7 +4,7 @@ and the tests' cameras, which look straight down the z axis at the origin."""
 import numpy as np
 
 from addon.tracer.builders import (  # noqa: F401 (the tests' scenes)
-    box_grid, environment, envmap, medium, sampled_grid, scene, smooth_ramp, sun)
+    box_grid, environment, envmap, medium, parallelogram, sampled_grid, scene, smooth_ramp, sun)
 from addon.tracer.scene import Camera
 
 

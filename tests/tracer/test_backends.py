@@ -154,8 +154,32 @@ def envmap():
     return s.scene(s.perspective_camera(8, 8), [medium], [light, s.sun([1, 0, 1], 1.0)])
 
 
+def surfaces():
+    """A chromatic floor cutting through a chromatic medium, and a triangle above them casting a shadow, under a
+    finite sun and an environment: free flights end at surfaces inside the medium's box, shadow rays stop at them,
+    BRDF sampling finds the infinite lights (MIS)."""
+    medium = s.medium(s.box_grid(), extinction=s.smooth_ramp(1.5, 0.5), albedo=0.9, g=0.3)
+    floor = s.parallelogram((-3.0, -3.0, -0.4), (6.0, 0.0, 0.0), (0.0, 6.0, 0.0), 3,
+                            reflectance=s.smooth_ramp(0.8, 0.3), name="floor")
+    blocker = s.parallelogram((-0.5, -2.0, 1.5), (1.2, 0.0, 0.3), (0.0, 1.5, 0.0), 1, reflectance=0.5,
+                              name="blocker")
+    lights = [s.sun([0.3, 0.2, 1.0], 2.0, angle=0.2), s.environment(0.4)]
+    return s.scene(s.perspective_camera(8, 8, fov_degrees=50.0), [medium], lights, [floor, blocker])
+
+
+def mesh_light():
+    """An emissive, reflecting square above a grey medium and a floor, the only light: mesh-light sampling and
+    BRDF and phase sampling finding the emitter, combined by MIS (grey paths: residual tracking)."""
+    medium = s.medium(blob_grid(), scale=2.0, extinction=1.0, albedo=s.smooth_ramp(0.95, 0.6), g=0.2)
+    floor = s.parallelogram((-3.0, -3.0, -1.2), (6.0, 0.0, 0.0), (0.0, 6.0, 0.0), 2, reflectance=0.7, name="floor")
+    lamp = s.parallelogram((-1.5, 1.5, 2.0), (1.5, 0.0, 0.0), (0.0, -3.0, 0.4), 2, reflectance=0.3,
+                           emission=s.smooth_ramp(1.0, 3.0), name="lamp")
+    return s.scene(s.perspective_camera(8, 8, fov_degrees=50.0), [medium], [], [floor, lamp])
+
+
 SCENES = {build.__name__: build for build in (grey_furnace, chromatic, heterogeneous, fluorescence, blackbody,
-                                              glow, rayleigh, two_media, point_and_spot, area_lights, envmap)}
+                                              glow, rayleigh, two_media, point_and_spot, area_lights, envmap,
+                                              surfaces, mesh_light)}
 
 
 def render_film(scene, backend, seed, spp=SPP) -> Film:

@@ -63,7 +63,7 @@ def full_scene() -> Scene:
     )
     camera = Camera(turn, 32, 24, "orthographic", np.radians(50), 4.5, "VERTICAL", 0.1, -0.05, 1.25)
     settings = RenderSettings(8, 3, 20, 2, "uv", 1, 300.0, 700.0, 4, "wyman3", "numpy")
-    return Scene(camera, (smoke, haze), lights, settings)
+    return Scene(camera, (smoke, haze), lights, settings=settings)
 
 
 def assert_same(a, b, where="scene"):
@@ -202,7 +202,7 @@ BAD = [
     ("format", "blender-scene", ["format: expected 'spectral-volume-scene'"]),
     ("version", 2, ["version", "found 2"]),
     ("camera", DELETE, ["missing required field 'camera'"]),
-    ("extra", 1, ["unknown field 'extra'", "allowed: format, version, camera, media, lights, render"]),
+    ("extra", 1, ["unknown field 'extra'", "allowed: format, version, camera, media, lights, surfaces, render"]),
     ("camera.lens", 50, ["camera: unknown field 'lens'", "fov"]),
     ("camera.width", 0, ["camera.width: must be at least 1, found 0"]),
     ("camera.height", -3, ["camera.height: must be at least 1"]),

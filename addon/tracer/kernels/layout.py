@@ -26,6 +26,8 @@ LIGHT_SKY = LIGHT_KINDS.index("sky")
 LIGHT_SPOT = LIGHT_KINDS.index("spot")
 LIGHT_AREA = LIGHT_KINDS.index("area")
 LIGHT_ENVMAP = LIGHT_KINDS.index("envmap")
+# A kernel light that no scene file names: an emissive surface (`scene.Surface.emission`), lowered to one light.
+LIGHT_MESH = len(LIGHT_KINDS)
 AREA_ELLIPSE = AREA_SHAPES.index("ellipse")
 MAX_WAVELENGTHS_PER_PATH = max(WAVELENGTHS_PER_PATH)
 # Shadow rays whose every transmittance is below this play Russian roulette, stopping with this probability.
@@ -33,6 +35,13 @@ SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
 # A path is grey when its attenuation per unit density spreads over its wavelengths by less than this
 # (relative; interpolating a flat spectrum rounds differently at each wavelength).
 GREY_SPREAD = 1e-9
+# A ray leaving a surface starts this far off it along its normal, relative to 1 + the largest |coordinate| of
+# the point (float64 rounding puts a computed hit point ~1e-16 of that off the plane), and a shadow ray
+# towards a point of an emissive surface stops as far short of it: neither finds the surface it started from
+# or ends on.
+SURFACE_OFFSET = 1e-9
+# The deepest a BVH gets (`bvh.build` falls back to median splits to stay within it), so traversal's stack.
+BVH_MAX_DEPTH = 96
 
 
 class KernelCamera(NamedTuple):
@@ -116,8 +125,8 @@ class KernelLights(NamedTuple):
     """The lights (NL): their kind, spectra and geometry, and how next-event estimation selects them."""
 
     kind: np.ndarray
-    # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky; envmap: its mean), intensity (point/spot; area:
-    # along its normal)
+    # (NL, GRID) radiometric: irradiance (sun), radiance (env/sky; envmap: its mean; an emissive surface, LIGHT_MESH),
+    # intensity (point/spot; area: along its normal)
     spd: np.ndarray
     spd_horizon: np.ndarray  # (NL, GRID) sky only
     dir: np.ndarray  # (NL, 3) towards the sun; spot axis for spots; the direction an area light emits along
@@ -143,6 +152,28 @@ class KernelEnvmaps(NamedTuple):
     row_cdf_offset: np.ndarray  # (NL,)
     column_cdf: np.ndarray  # (H (W + 1) per map) each row's cdf over its columns, 0 … 1
     column_cdf_offset: np.ndarray  # (NL,)
+
+
+class KernelSurfaces(NamedTuple):
+    """The surfaces' (S) triangles (T, zero-area ones dropped) in the order of their bounding volume hierarchy
+    (`bvh.build`), its nodes (N), the surfaces' spectra, and the emissive surfaces' triangle distributions."""
+
+    corner: np.ndarray  # (T, 3) each triangle's first vertex
+    edge1: np.ndarray  # (T, 3) its second vertex less the first
+    edge2: np.ndarray  # (T, 3) its third vertex less the first
+    normal: np.ndarray  # (T, 3) unit normal, edge1 × edge2 normalised
+    surface: np.ndarray  # (T,) the surface each belongs to
+    node_bounds: np.ndarray  # (N, 6) each node's box: lower x, y, z, upper x, y, z
+    node_first: np.ndarray  # (N,) an inner node's left child (its right one follows it); a leaf's first triangle
+    node_count: np.ndarray  # (N,) a leaf's number of triangles, 0 for an inner node
+    reflectance: np.ndarray  # (S, GRID) Lambertian albedo
+    light: np.ndarray  # (S,) the kernel light (LIGHT_MESH) of an emissive surface, -1 for the others
+    of_light: np.ndarray  # (NL,) the surface of each kernel light, -1 for lights that are not surfaces
+    area: np.ndarray  # (S,) total area
+    emitter_cdf: np.ndarray  # each emissive surface's cdf over its triangles by area, from 0 to 1, back to back
+    emitter_triangle: np.ndarray  # each bin's triangle, at its cdf node's index (each surface's last entry -1)
+    emitter_offset: np.ndarray  # (S,) where each surface's cdf starts in emitter_cdf (and its bins in emitter_triangle)
+    emitter_count: np.ndarray  # (S,) its number of triangles (0: not emissive)
 
 
 class KernelWavelengths(NamedTuple):
@@ -178,5 +209,6 @@ class KernelScene(NamedTuple):
     fluorescence: KernelFluorescence
     lights: KernelLights
     envmaps: KernelEnvmaps
+    surfaces: KernelSurfaces
     wavelengths: KernelWavelengths
     termination: KernelTermination

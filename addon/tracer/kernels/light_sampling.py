@@ -14,8 +14,10 @@ import numpy as np
 from ..phase import INV_FOUR_PI, sample_direction
 from ..shared_math import select, shared, shared_inline
 from .envmap import envmap_pdf, envmap_radiance, envmap_sample
-from .layout import AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_ENVMAP, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN
+from .layout import (
+    AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_ENVMAP, LIGHT_MESH, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN)
 from .lookups import table_at
+from .surfaces import emitter_pdf, emitter_point
 
 # The solid angles within which a rectangle light is sampled by solid angle (pbrt-v4's bounds): a smaller one
 # is the sum of four angles less 2π, lost to rounding; a larger one, close to the light, loses precision too.
@@ -38,11 +40,12 @@ def choose_light(pmf, u):
 @shared_inline
 def is_delta(ks, light):
     """Whether the light is a delta light (a sun of no angle, a point, a spot), or an area light, which is
-    treated as one: sampled, never hit (paths do not see its surface, so no MIS weighs its samples)."""
+    treated as one: sampled, never hit (paths do not see its surface, so no MIS weighs its samples). An
+    emissive surface is not: paths hit it."""
     kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
         return ks.lights.cos[light] >= 1.0
-    return kind != LIGHT_ENVIRONMENT and kind != LIGHT_SKY and kind != LIGHT_ENVMAP
+    return kind != LIGHT_ENVIRONMENT and kind != LIGHT_SKY and kind != LIGHT_ENVMAP and kind != LIGHT_MESH
 
 
 @shared_inline
@@ -191,6 +194,14 @@ def sample_light(ks, light, px, py, pz, u1, u2):
     if kind == LIGHT_ENVMAP:
         wx, wy, wz, direction_pdf = envmap_sample(ks, light, u1, u2)
         return wx, wy, wz, direction_pdf, np.inf, 1.0
+    if kind == LIGHT_MESH:
+        qx, qy, qz, nx, ny, nz = emitter_point(ks, light, u1, u2)
+        vx, vy, vz = qx - px, qy - py, qz - pz
+        distance = np.sqrt(vx * vx + vy * vy + vz * vz)
+        wx, wy, wz = vx / distance, vy / distance, vz / distance
+        cos_light = np.abs(wx * nx + wy * ny + wz * nz)
+        area = ks.surfaces.area[ks.surfaces.of_light[light]]
+        return wx, wy, wz, emitter_pdf(area, distance, cos_light), distance, 1.0
     position = ks.lights.pos[light]
     qx, qy, qz, solid_angle = position[0], position[1], position[2], 0.0
     if kind == LIGHT_AREA:
@@ -221,8 +232,10 @@ def sample_light(ks, light, px, py, pz, u1, u2):
 @shared_inline
 def incident_radiance(ks, light, at, wx, wy, wz, falloff):
     """Radiance arriving along a direction that `sample_light` drew, at the wavelengths located by `at`: a
-    delta or area light's spectrum (irradiance or intensity) times the sample's falloff, else
-    `infinite_radiance`."""
+    delta or area light's spectrum (irradiance or intensity) times the sample's falloff, an emissive
+    surface's radiance (the same on both sides), else `infinite_radiance`."""
     if is_delta(ks, light):
         return table_at(ks.lights.spd, light, at) * falloff
+    if ks.lights.kind[light] == LIGHT_MESH:
+        return table_at(ks.lights.spd, light, at)
     return infinite_radiance(ks, light, at, wx, wy, wz)

@@ -22,21 +22,25 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   environment, sky, envmaps and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
 - Thermal emission σ_a·Planck(T) and glow (emission that does not depend on absorption) are collected at every
   tentative collision.
+- Surfaces (opaque Lambertian triangles, some emissive) end free flights: the closest hit along a ray
+  (`_closest_hit`, a walk of the triangles' hierarchy) is the tracking's far end, and a path that gets there
+  collects the surface's emission (MIS-weighted against light sampling after a scattering vertex,
+  `_surface_emission`), then reflects: next-event estimation with the Lambertian BRDF and cosine-weighted
+  sampling (`_sample_lambert`). Shadow rays that meet a surface carry nothing (`_shadow_blocked`).
 
 Structure: `render_tile` runs runs of pixels in parallel (`_render_runs`); `_render_pixels` makes a run's buffers once
 (each allocation updates Numba's global counters atomically) and `_render_samples` runs a pixel's samples, each through
 the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `geometry.camera_ray`, then transport
-(`_trace`: `_transport` with `_free_flight`, `_offer_fluorescence`, `_escape`, `_next_event`, `_sample_phase`,
-`_survives_roulette`; then `_start_fluorescent_branch` for each fluorescent sub-path),
-then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`). The
-physics at a point (look-ups, coefficients, phase functions, lights, free paths, the DDA's arithmetic) is the shared
-arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module holds the path's loops
-and state, and the estimator's arithmetic on them (weight and MIS-ratio updates, contributions, roulette).
-Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
-scene's arrays are borrowed
-(`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
-reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call. The
-arrays sit in the scene's nested groups (`layout.KernelScene`), all of which `_borrowed` borrows.
+(`_trace`: `_transport` with `_closest_hit`, `_free_flight`, `_offer_fluorescence`, `_escape`, `_surface_emission`,
+`_next_event`, `_sample_phase` or `_sample_lambert`, `_survives_roulette`; then `_start_fluorescent_branch` for each
+fluorescent sub-path), then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`,
+`Fluorescent`, `Hit`). The physics at a point (look-ups, coefficients, phase functions, lights, surfaces, free paths,
+the DDA's arithmetic) is the shared arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module
+holds the path's loops and state, and the estimator's arithmetic on them (weight and MIS-ratio updates,
+contributions, roulette). Every function below `_render_samples`, shared ones included, is inlined into it,
+and the kernel scene's arrays are borrowed (`_borrowed`): a call that takes the scene costs nothing, where Numba would
+otherwise update the reference count of each of its ~40 arrays (atomic operations that threads contend for) on every
+call. The arrays sit in the scene's nested groups (`layout.KernelScene`), all of which `_borrowed` borrows.
 """
 
 import functools
@@ -55,11 +59,13 @@ from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, fro
 from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
+    BVH_MAX_DEPTH,
     GREY_SPREAD,
     MAX_WAVELENGTHS_PER_PATH,
     PHASE_RAYLEIGH,
     SHADOW_ROULETTE_BELOW,
     SHADOW_ROULETTE_STOP,
+    SURFACE_OFFSET,
     KernelScene,
 )
 from .light_sampling import choose_light, incident_radiance, infinite_pdf, infinite_radiance, is_delta, sample_light
@@ -79,6 +85,7 @@ from .media import (
 )
 from .numba_cache import cached
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
+from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
 
 # Every kernel function divides as NumPy does (x/0 gives inf or nan, like the NumPy backend) instead of
 # Python's model, which checks every divisor for zero to raise ZeroDivisionError: the images are
@@ -384,6 +391,140 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
     return wx, wy, wz, direction_pdf, distance, is_delta(ks, light)
 
 
+# ----------------------------------------------------------------------------- surfaces
+
+@jit(inline="always")
+def _box_entry(ks, node, ox, oy, oz, ix, iy, iz, t_max):
+    """Where the ray o + t d (with inverse direction i) enters the box of node `node` within [0, t_max], or
+    INF where it misses it there."""
+    bounds = ks.surfaces.node_bounds[node]
+    t0, t1 = (bounds[0] - ox) * ix, (bounds[3] - ox) * ix
+    near, far = min(t0, t1), max(t0, t1)
+    t0, t1 = (bounds[1] - oy) * iy, (bounds[4] - oy) * iy
+    near, far = max(near, min(t0, t1)), min(far, max(t0, t1))
+    t0, t1 = (bounds[2] - oz) * iz, (bounds[5] - oz) * iz
+    near, far = max(near, min(t0, t1), 0.0), min(far, max(t0, t1), t_max)
+    return near if near <= far else INF
+
+
+@jit(inline="always")
+def _inverse(d):
+    """1/d, a huge number of the same sign for d = 0 (a slab the ray runs along is all or nothing)."""
+    return 1.0 / d if d != 0.0 else 1e300
+
+
+@jit(inline="always")
+def _closest_hit(ks, ox, oy, oz, dx, dy, dz, t_max, any_hit, hit):
+    """The nearest triangle along the ray o + t d with 0 < t < t_max, walking the hierarchy nearer child
+    first: (t, triangle), or (t_max, -1) where none is. With `any_hit`, the first triangle found (a shadow
+    ray needs no more)."""
+    best_t, best = t_max, -1
+    if ks.surfaces.node_count.shape[0] == 0:
+        return best_t, best
+    ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
+    nodes, entries = hit.nodes, hit.entries
+    entry = _box_entry(ks, 0, ox, oy, oz, ix, iy, iz, best_t)
+    top = 0
+    if entry < INF:
+        nodes[0], entries[0], top = 0, entry, 1
+    while top > 0:
+        top -= 1
+        if entries[top] > best_t:
+            continue
+        node = nodes[top]
+        first, count = ks.surfaces.node_first[node], ks.surfaces.node_count[node]
+        if count > 0:
+            for k in range(first, first + count):
+                t = triangle_distance(ks, k, ox, oy, oz, dx, dy, dz)
+                if t < best_t:
+                    best_t, best = t, k
+                    if any_hit:
+                        return best_t, best
+            continue
+        near = _box_entry(ks, first, ox, oy, oz, ix, iy, iz, best_t)
+        far = _box_entry(ks, first + 1, ox, oy, oz, ix, iy, iz, best_t)
+        near_node, far_node = first, first + 1
+        if far < near:
+            near, far, near_node, far_node = far, near, first + 1, first
+        if far < INF:
+            nodes[top], entries[top], top = far_node, far, top + 1
+        if near < INF:
+            nodes[top], entries[top], top = near_node, near, top + 1
+    return best_t, best
+
+
+@jit(inline="always")
+def _shadow_blocked(ks, ox, oy, oz, wx, wy, wz, distance, hit):
+    """Whether a surface lies on the shadow ray from o along w before `distance` (stopping SURFACE_OFFSET short
+    of its end, which may lie on an emissive surface)."""
+    if ks.surfaces.node_count.shape[0] == 0:
+        return False
+    t_max = distance
+    if distance < INF:
+        qx, qy, qz = ox + distance * wx, oy + distance * wy, oz + distance * wz
+        t_max = distance - SURFACE_OFFSET * (1.0 + max(abs(qx), abs(qy), abs(qz)))
+    _, triangle = _closest_hit(ks, ox, oy, oz, wx, wy, wz, t_max, True, hit)
+    return triangle >= 0
+
+
+@jit(inline="always")
+def _surface_emission(ks, triangle, distance, dx, dy, dz, scattered, survival, n, path, light):
+    """Radiance of an emissive surface that a path hits at `distance` along d: plain for a camera ray,
+    MIS-weighted against light sampling after a scattering vertex, with the path's `survival` along the ray
+    (as `_escape`)."""
+    s = ks.surfaces.surface[triangle]
+    chosen = ks.surfaces.light[s]
+    if chosen < 0:
+        return
+    for i in range(n):
+        light.radiance[i] = table_at(ks.lights.spd, chosen, on_grid(path.lams[i]))
+    if not scattered:
+        mean_r, weight = _mean(path.r_u, n), 1.0
+    else:
+        normal = ks.surfaces.normal[triangle]
+        cos_light = abs(dx * normal[0] + dy * normal[1] + dz * normal[2])
+        light_pdf = ks.lights.pmf[chosen] * emitter_pdf(ks.surfaces.area[s], distance, cos_light)
+        for i in range(n):
+            light.r_l[i] = path.r_u[i] * survival + path.r_l[i] * light_pdf
+        mean_r, weight = _mean(light.r_l, n), survival
+    if mean_r > 0.0:
+        for i in range(n):
+            path.radiance[i] += path.beta[i] * light.radiance[i] * weight / mean_r
+
+
+@jit(inline="always")
+def _arrive_at_surface(ks, triangle, px, py, pz, dx, dy, dz, n, path, hit):
+    """A path reaching triangle `triangle` at p along d: the surface's normal on the path's side and its
+    reflectance at the path's wavelengths into `hit`; returns the point leaving it on that side, and whether
+    the surface reflects any of the path's light."""
+    nx, ny, nz = facing_normal(ks, triangle, dx, dy, dz)
+    hit.normal[0], hit.normal[1], hit.normal[2] = nx, ny, nz
+    s = ks.surfaces.surface[triangle]
+    reflects = False
+    for i in range(n):
+        hit.reflectance[i] = table_at(ks.surfaces.reflectance, s, on_grid(path.lams[i]))
+        if hit.reflectance[i] > 0.0 and path.beta[i] > 0.0:
+            reflects = True
+    ox, oy, oz = offset_point(px, py, pz, nx, ny, nz)
+    return ox, oy, oz, reflects
+
+
+@jit(inline="always")
+def _sample_lambert(n, path, hit):
+    """Cosine-weighted sampling of the direction leaving a surface (the same pdf at every wavelength, so
+    the throughput takes the reflectance): the new direction, or a zero vector where its pdf is zero."""
+    u1, u2 = _next(path.stream), _next(path.stream)
+    cos_theta = lambert_sample_cos(u1)
+    pdf0 = lambert_pdf(cos_theta)
+    if pdf0 <= 0.0:
+        return 0.0, 0.0, 0.0
+    nx, ny, nz = sample_direction((hit.normal[0], hit.normal[1], hit.normal[2]), cos_theta, u2)
+    for i in range(n):
+        path.r_l[i] = path.r_u[i] / pdf0
+        path.beta[i] *= hit.reflectance[i]
+    return normalize(nx, ny, nz)
+
+
 # ----------------------------------------------------------------------------- path state
 
 # One path's state, one slot per wavelength (buffers made once per pixel by `_new_path`, reused by its
@@ -405,6 +546,9 @@ Tracker = namedtuple("Tracker", "state_i state_f")
 # medium and vertex depth, and its dye optical depth; the dye optical depth along the current segment; the
 # radiance collected so far and the factor of each camera wavelength for the sub-path being traced.
 Fluorescent = namedtuple("Fluorescent", "total point share medium tau_at tau radiance scale")
+# A surface's hierarchy walk (`_closest_hit`: its stack of nodes and where the ray enters them) and the surface
+# a path is on (`_arrive_at_surface`: the normal on the path's side, the reflectance at its wavelengths).
+Hit = namedtuple("Hit", "nodes entries normal reflectance")
 
 
 @jit(inline="always")
@@ -431,6 +575,12 @@ def _new_fluorescent():
     return Fluorescent(np.zeros(RESERVOIRS), np.zeros((RESERVOIRS, 3)), np.zeros((RESERVOIRS, MAX_LAMBDAS)),
                        np.zeros((RESERVOIRS, 2), dtype=np.int64), np.zeros(RESERVOIRS), np.zeros(1),
                        np.zeros(MAX_LAMBDAS), np.zeros(MAX_LAMBDAS))
+
+
+@jit(inline="always")
+def _new_hit():
+    return Hit(np.zeros(2 * BVH_MAX_DEPTH, dtype=np.int64), np.zeros(2 * BVH_MAX_DEPTH), np.zeros(3),
+               np.zeros(MAX_LAMBDAS))
 
 
 @jit(inline="always")
@@ -592,16 +742,22 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
 
 
 @jit(inline="always")
-def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, grey, n, path, vertex, light, tracker):
-    """Next-event estimation from a scattering vertex: one light chosen by its pmf, ratio-tracked
-    transmittance (residual ratio tracking towards delta lights and on `grey` paths), MIS against phase
-    sampling (balance heuristic over wavelengths and strategies)."""
+def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, on_surface, grey, n, path, vertex, light, tracker, hit):
+    """Next-event estimation from a scattering vertex in a medium or on a surface (`on_surface`: the BRDF
+    ρ/π, `hit`): one light chosen by its pmf, a shadow ray that a surface stops, ratio-tracked transmittance
+    (residual ratio tracking towards delta lights and on `grey` paths), MIS against phase or BRDF sampling
+    (balance heuristic over wavelengths and strategies). `light.phase` holds the sampling pdf of the
+    direction, which at a medium is also the phase function's value."""
     chosen = choose_light(ks.lights.pmf, _next(path.stream))
     u1, u2 = _next(path.stream), _next(path.stream)
     wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, chosen, ox, oy, oz, u1, u2, path.lams, n,
                                                                light.radiance)
     cos_theta = dx * wx + dy * wy + dz * wz
-    if isotropic:
+    if on_surface:
+        cos_surface = hit.normal[0] * wx + hit.normal[1] * wy + hit.normal[2] * wz
+        for i in range(n):
+            light.phase[i] = lambert_pdf(cos_surface)
+    elif isotropic:
         for i in range(n):
             light.phase[i] = INV_FOUR_PI
     else:
@@ -610,7 +766,7 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, grey, n, path, vertex, li
     for i in range(n):
         if light.radiance[i] > 0.0 and light.phase[i] > 0.0 and path.beta[i] > 0.0:
             any_light = True
-    if not any_light:
+    if not any_light or _shadow_blocked(ks, ox, oy, oz, wx, wy, wz, distance, hit):
         return
     _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, delta or grey, n, path, light, tracker)
     light_pdf = ks.lights.pmf[chosen] * direction_pdf
@@ -622,7 +778,8 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, grey, n, path, vertex, li
     mean_r = _mean(light.r_l, n)
     if mean_r > 0.0:
         for i in range(n):
-            path.radiance[i] += path.beta[i] * light.phase[i] * light.transmittance[i] * light.radiance[i] / mean_r
+            value = light.phase[i] * hit.reflectance[i] if on_surface else light.phase[i]
+            path.radiance[i] += path.beta[i] * value * light.transmittance[i] * light.radiance[i] / mean_r
 
 
 @jit(inline="always")
@@ -657,17 +814,18 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
 
 
 @jit(inline="always")
-def _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, controls, n, path, vertex, tracker, fl):
-    """Delta tracking to the next real event, collecting emission (thermal, glow) and offering fluorescent sources
-    at every tentative collision and weighting null collisions (spectral MIS ratios included). Returns
-    (event, collision point, σ̄ there); `vertex` keeps the coefficients at a scattering collision.
+def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, n, path, vertex, tracker, fl):
+    """Delta tracking to the next real event before t_max (a surface; EVENT_ESCAPE there), collecting emission
+    (thermal, glow) and offering fluorescent sources at every tentative collision and weighting null collisions
+    (spectral MIS ratios included). Returns (event, collision point, σ̄ there); `vertex` keeps the coefficients
+    at a scattering collision.
 
     With `controls` (a grey path after a scattering vertex, `_is_grey`), light sampling's MIS ratio `r_l`
     takes no null-event probabilities: the controls are integrated instead, and an escaping path's
     survival is their transmittance, as a shadow ray's (`_transmittance`)."""
     beta, r_u, r_l = path.beta, path.r_u, path.r_l
     sigma_a, sigma_s = vertex.sigma_a, vertex.sigma_s
-    _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, INF, tracker)
+    _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, tracker)
     if controls:
         for m in range(ks.media.density_scale.shape[0]):
             tracker.state_f[m, DEPTH] = 0.0
@@ -806,42 +964,61 @@ def _survives_roulette(ks, depth, n, path):
 
 
 @jit(inline="always")
-def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, light, tracker, fl):
+def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, light, tracker, fl, hit):
     """Transport from a camera ray, or (`emitted`) from an isotropic fluorescent emission at (ox, oy, oz)
     at vertex `depth`: collects the radiance per wavelength in `path.radiance` and offers fluorescent
-    sources to `fl`."""
+    sources to `fl`. A vertex is a real collision in a medium or a surface the path reaches (`on_surface`)."""
     grey = _is_grey(ks, n, path.spec)
     scattered = emitted
     at_vertex = emitted
+    on_surface = False
     while True:
         if at_vertex:
             if ks.lights.kind.shape[0] > 0:
-                _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, grey, n, path, vertex, light, tracker)
-            dx, dy, dz = _sample_phase(ks, dx, dy, dz, emitted, n, path, vertex, light)
+                _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, on_surface, grey, n, path, vertex, light, tracker,
+                            hit)
+            if on_surface:
+                dx, dy, dz = _sample_lambert(n, path, hit)
+            else:
+                dx, dy, dz = _sample_phase(ks, dx, dy, dz, emitted, n, path, vertex, light)
             if dx == 0.0 and dy == 0.0 and dz == 0.0:
                 return
             scattered = True
             emitted = False
             if not _survives_roulette(ks, depth, n, path):
                 return
+        t_hit, triangle = _closest_hit(ks, ox, oy, oz, dx, dy, dz, INF, False, hit)
         controls = grey and scattered
-        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, depth, controls, n, path, vertex,
-                                                    tracker, fl)
+        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, t_hit, depth, controls, n, path,
+                                                    vertex, tracker, fl)
         if event == EVENT_ABSORB:
             return
         if event == EVENT_ESCAPE:
             survival = math.exp(-_control_depth(ks, tracker, path.spec, 0)) if controls else 1.0
-            _escape(ks, dx, dy, dz, scattered, survival, n, path, light)
-            return
+            if triangle < 0:
+                _escape(ks, dx, dy, dz, scattered, survival, n, path, light)
+                return
+            _surface_emission(ks, triangle, t_hit, dx, dy, dz, scattered, survival, n, path, light)
+            depth += 1
+            if depth > ks.termination.max_depth:
+                return
+            ox, oy, oz, reflects = _arrive_at_surface(ks, triangle, ox + t_hit * dx, oy + t_hit * dy, oz + t_hit * dz,
+                                                      dx, dy, dz, n, path, hit)
+            if not reflects:
+                return
+            on_surface = True
+            at_vertex = True
+            continue
         depth += 1
         if depth > ks.termination.max_depth:
             return
         ox, oy, oz = qx, qy, qz
+        on_surface = False
         at_vertex = True
 
 
 @jit(inline="always")
-def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl):
+def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl, hit):
     """Transport of one path from a camera ray, then of its fluorescent sub-paths one after another, all
     through the one `_transport` below (inlined once, not once per kind of path): collects the path's
     radiance per camera wavelength in `path.radiance`."""
@@ -849,7 +1026,7 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl):
         fl.total[j] = 0.0
     depth, emitted, count = 0, False, n
     while True:
-        _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, count, path, vertex, light, tracker, fl)
+        _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, count, path, vertex, light, tracker, fl, hit)
         k, weight = _chosen_source(path, fl)
         for i in range(n):
             if emitted:  # a sub-path: its radiance at λ_in, then the weight of the next one
@@ -874,12 +1051,12 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
     allocation counters atomically, which threads contend for."""
     media = max(ks.media.density_scale.shape[0], 1)
     path, vertex = _new_path(media), _new_coefficients(media)
-    light, tracker, fl = _new_light_sample(), _new_tracker(media), _new_fluorescent()
+    light, tracker, fl, hit = _new_light_sample(), _new_tracker(media), _new_fluorescent(), _new_hit()
     for index in range(first, last):
         row, column = index // tile_width, index % tile_width
         px, py = x0 + column, y0 + row
         sx, sy, sz, qx, qy, qz = _render_samples(ks, px, py, py * ks.camera.width + px, sample_begin, sample_end, seed,
-                                                 band, path, vertex, light, tracker, fl)
+                                                 band, path, vertex, light, tracker, fl, hit)
         sum_xyz[row, column, 0] += sx
         sum_xyz[row, column, 1] += sy
         sum_xyz[row, column, 2] += sz
@@ -889,12 +1066,12 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
 
 
 @jit
-def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, light, tracker, fl):
+def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, light, tracker, fl, hit):
     """Samples [sample_begin, sample_end) of one pixel, (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z²), in the path's
     buffers (`_render_pixels` makes them). The scene and the buffers, which the caller keeps
     alive, are borrowed (`_borrowed`): the loop below then updates no reference counts."""
-    ks, path, vertex, light, tracker, fl = (_borrowed(ks), _borrowed(path), _borrowed(vertex), _borrowed(light),
-                                            _borrowed(tracker), _borrowed(fl))
+    ks, path, vertex, light, tracker, fl, hit = (_borrowed(ks), _borrowed(path), _borrowed(vertex), _borrowed(light),
+                                                 _borrowed(tracker), _borrowed(fl), _borrowed(hit))
     n = ks.wavelengths.per_path
     path.stream[2] = pixel_key(seed, band, pixel)
     sx, sy, sz, qx, qy, qz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -904,7 +1081,7 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
         path.stream[3] = sample
         _sample_wavelengths(ks, n, path)
         ox, oy, oz, dx, dy, dz = camera_ray(ks, px, py, _next(path.stream), _next(path.stream))
-        _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl)
+        _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl, hit)
         x, y, z = _path_xyz(ks, n, path)
         sx, sy, sz = sx + x, sy + y, sz + z
         qx, qy, qz = qx + x * x, qy + y * y, qz + z * z
@@ -922,20 +1099,21 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
     _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.glow, ks.media, ks.fluorescence, ks.lights,
-                 ks.envmaps, ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
-                 sum_xyz, sum_sq)
+                 ks.envmaps, ks.surfaces, ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin,
+                 sample_end, seed, band, sum_xyz, sum_sq)
 
 
 @jit(parallel=True, nogil=True)
-def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, wavelengths,
-                 termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
+                 wavelengths, termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
+                 sum_xyz, sum_sq):
     """`render_tile`'s runs of pixels, in parallel. The kernel scene comes as its groups, and each run puts
     them together again: Numba's parallel loop hands a tuple to its threads member by member, which fails
     when a member is a tuple itself."""
     pixels = tile_width * tile_height
     chunks = min(pixels, PIXEL_CHUNKS)
     for chunk in prange(chunks):
-        ks = KernelScene(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps,
+        ks = KernelScene(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
                          wavelengths, termination)
         _render_pixels(ks, x0, y0, tile_width, chunk * pixels // chunks, (chunk + 1) * pixels // chunks, sample_begin,
                        sample_end, seed, band, sum_xyz, sum_sq)

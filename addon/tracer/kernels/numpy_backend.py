@@ -9,6 +9,11 @@ physics at each point is the arithmetic the Numba kernel compiles (look-ups, coe
 lights, free paths: docs/algorithm.md), called here on arrays of paths; this module holds
 the wavefront's loops and state, and the estimator's arithmetic on them (as the Numba kernel holds its own).
 
+Surfaces: every ray is tested against every triangle (`_closest_hits`, brute force over chunks of triangles,
+the independent check of the Numba kernel's hierarchy); a path's free flight ends at the nearest one, where it
+collects the surface's emission and reflects (`_arrive_at_surfaces`, then `_scatter` with the Lambertian BRDF
+for the rows `on_surface`), and shadow rays that meet one carry nothing.
+
 Free flight and shadow rays traverse each medium's majorant grid block by block, a DDA vectorised over
 rays (`_tracker_*`, the same state machine as the Numba kernel's, on the shared per-axis arithmetic of
 `dda`): each loop iteration moves every ray by one segment or one tentative collision, and rays that are
@@ -31,12 +36,14 @@ from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
-from .layout import GREY_SPREAD, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP
+from .layout import GREY_SPREAD, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP, SURFACE_OFFSET
 from .light_sampling import choose_light, incident_radiance, infinite_pdf, infinite_radiance, is_delta, sample_light
 from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
+from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
 
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
+CHUNK_PAIRS = 1 << 20  # ray–triangle pairs tested together (`_closest_hits`: ~20 arrays of this size)
 INF = np.inf
 EVENT_ESCAPE, EVENT_SCATTER, EVENT_ABSORB = 0, 1, 2
 
@@ -319,7 +326,76 @@ def _sample_lights(ks, lights, points, u1, u2, lams):
     return out
 
 
+# ----------------------------------------------------------------------------- surfaces
+
+def _closest_hits(ks, origins, directions, t_max):
+    """(t, triangle) of the nearest triangle along each ray with 0 < t < t_max (t_max and -1 where none is), by
+    testing every triangle (in chunks of about CHUNK_PAIRS ray–triangle pairs)."""
+    count, triangles = origins.shape[0], ks.surfaces.corner.shape[0]
+    best_t, best = np.broadcast_to(t_max, (count,)).astype(np.float64), np.full(count, -1, dtype=np.int64)
+    if not triangles or not count:
+        return best_t, best
+    step = max(1, CHUNK_PAIRS // count)
+    o, d = _columns(origins[:, :, None]), _columns(directions[:, :, None])
+    for first in range(0, triangles, step):
+        k = np.arange(first, min(first + step, triangles))
+        t = triangle_distance(ks, k[None, :], *o, *d)
+        nearest = np.argmin(t, axis=1)
+        t = t[np.arange(count), nearest]
+        closer = t < best_t
+        best_t[closer], best[closer] = t[closer], k[nearest[closer]]
+    return best_t, best
+
+
+def _shadow_blocked(ks, origins, directions, distance):
+    """Which shadow rays meet a surface before `distance` (stopping SURFACE_OFFSET short of the end, which may lie
+    on an emissive surface), as the Numba kernel's `_shadow_blocked`."""
+    ends = origins + np.where(np.isfinite(distance), distance, 0.0)[:, None] * directions
+    shortened = distance - SURFACE_OFFSET * (1.0 + np.abs(ends).max(axis=1))
+    return _closest_hits(ks, origins, directions, np.where(np.isfinite(distance), shortened, INF))[1] >= 0
+
+
+def _surface_emission(ks, paths, triangle, distance, survival, radiance):
+    """Radiance of the emissive surfaces that paths hit (triangle, at `distance` along their rays): plain for
+    camera rays, MIS-weighted against light sampling after a scattering vertex, with each path's `survival`
+    along its ray (as `_escape`)."""
+    light = ks.surfaces.light[ks.surfaces.surface[triangle]]
+    rows = np.flatnonzero(light >= 0)
+    if not rows.size:
+        return
+    paths, triangle, light = paths.take(rows), triangle[rows], light[rows]
+    emitted = table_at(ks.lights.spd, light[:, None], on_grid(paths.lams))
+    normal = ks.surfaces.normal[triangle]
+    cos_light = np.abs(np.sum(normal * paths.d, axis=1))
+    light_pdf = (ks.lights.pmf[light] * emitter_pdf(ks.surfaces.area[ks.surfaces.surface[triangle]], distance[rows],
+                                                    cos_light))[:, None]
+    survival = survival[rows]
+    mean_r = np.where(paths.scattered, _mean(paths.r_u * survival[:, None] + paths.r_l * light_pdf),
+                      _mean(paths.r_u))[:, None]
+    weight = np.where(paths.scattered, survival, 1.0)[:, None]
+    radiance[paths.id] += np.where(mean_r > 0.0, paths.beta * emitted * weight / mean_r, 0.0)
+
+
+def _arrive_at_surfaces(ks, paths, triangle, distance):
+    """Paths reaching triangles at `distance` along their rays: the surfaces' normals on the paths' side and
+    their reflectance at the paths' wavelengths, the paths moved to the points leaving the surfaces there
+    (as the Numba kernel's `_arrive_at_surface`); returns which paths the surfaces reflect any light of."""
+    points = paths.o + distance[:, None] * paths.d
+    normal = _rows(facing_normal(ks, triangle, *_columns(paths.d)), len(paths))
+    paths.normal = normal
+    paths.reflectance = table_at(ks.surfaces.reflectance, ks.surfaces.surface[triangle][:, None], on_grid(paths.lams))
+    paths.o = _rows(offset_point(*_columns(points), *_columns(normal)), len(paths))
+    paths.on_surface = np.ones(len(paths), dtype=bool)
+    return np.any((paths.reflectance > 0.0) & (paths.beta > 0.0), axis=1)
+
+
 # ----------------------------------------------------------------------------- transport
+
+def _surface_state(count, n):
+    """A new batch's surface fields: not on a surface (`on_surface`), its normal and reflectance
+    (`_arrive_at_surfaces`)."""
+    return dict(on_surface=np.zeros(count, dtype=bool), normal=np.zeros((count, 3)), reflectance=np.zeros((count, n)))
+
 
 def _camera_paths(ks, px, py, pixel_keys, samples):
     """New paths through pixels (px, py) (box filter), samples `samples` of the pixels keyed `pixel_keys`:
@@ -331,7 +407,8 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
     paths = _Batch(id=np.arange(count), stream=stream,
                    lams=np.empty((count, n)), beta=np.ones((count, n)), r_u=np.ones((count, n)),
                    r_l=np.ones((count, n)), o=np.zeros((count, 3)), d=np.zeros((count, 3)),
-                   depth=np.zeros(count, dtype=np.int64), scattered=np.zeros(count, dtype=bool))
+                   depth=np.zeros(count, dtype=np.int64), scattered=np.zeros(count, dtype=bool),
+                   **_surface_state(count, n))
     u = _draw(paths)
     lam_cam, pdf_cam = np.empty((count, n)), np.empty((count, n))
     for i in range(n):
@@ -379,15 +456,15 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
     fl.tau[ids] = tau + c.dye / sigma_bar
 
 
-def _free_flight(ks, paths, radiance, fl):
-    """Delta tracking of every path to its next real event, collecting emission (thermal, glow) and offering
-    fluorescent sources at each tentative collision and weighting null collisions (spectral MIS ratios
-    included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls instead of
-    putting null-event probabilities into `r_l`, as the Numba kernel's `_free_flight`.
+def _free_flight(ks, paths, radiance, fl, t_max):
+    """Delta tracking of every path to its next real event before t_max (a surface, or INF), collecting emission
+    (thermal, glow) and offering fluorescent sources at each tentative collision and weighting null collisions
+    (spectral MIS ratios included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls
+    instead of putting null-event probabilities into `r_l`, as the Numba kernel's `_free_flight`.
 
-    Returns each path's event, the vertex data of scattering events (position q and the per-medium σ_s at
-    q) and each path's survival along its ray as a shadow ray would give it (`_transmittance`; 1 where
-    `r_l` has the null-event probabilities), for `_escape`."""
+    Returns each path's event (EVENT_ESCAPE for one that reaches t_max), the vertex data of scattering events
+    (position q and the per-medium σ_s at q) and each path's survival along its ray as a shadow ray would give it
+    (`_transmittance`; 1 where `r_l` has the null-event probabilities), for `_escape` and `_surface_emission`."""
     count, n = paths.lams.shape
     vertex = _Batch(event=np.full(count, EVENT_ESCAPE, dtype=np.int8), q=np.zeros((count, 3)),
                     medium_s=np.zeros((count, ks.media.density_scale.shape[0], n)), survival=np.ones(count))
@@ -426,7 +503,7 @@ def _free_flight(ks, paths, radiance, fl):
         return stop
 
     fl.tau[paths.id] = 0.0
-    _track(ks, paths, np.arange(count), paths.o, paths.d, INF, collide, controls=controls,
+    _track(ks, paths, np.arange(count), paths.o, paths.d, t_max, collide, controls=controls,
            travel=travel if controls.any() else None)
     escaped = np.flatnonzero(controls & (vertex.event == EVENT_ESCAPE))
     spectra = _attenuation_spectra(ks, paths.lams[escaped, :1])
@@ -541,9 +618,14 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
     sample = _sample_lights(ks, lights, paths.o, u1, u2, paths.lams)
     cos_theta = (paths.d[:, 0] * sample.w[:, 0] + paths.d[:, 1] * sample.w[:, 1]
                  + paths.d[:, 2] * sample.w[:, 2])
+    cos_surface = (paths.normal[:, 0] * sample.w[:, 0] + paths.normal[:, 1] * sample.w[:, 1]
+                   + paths.normal[:, 2] * sample.w[:, 2])
     phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
                             _mixture_phase(ks, vertex.medium_s, paths.lams, cos_theta))
+    phase_values = np.where(paths.on_surface[:, None], lambert_pdf(cos_surface)[:, None], phase_values)
     lit = np.any((sample.radiance > 0.0) & (phase_values > 0.0) & (paths.beta > 0.0), axis=1)
+    candidates = np.flatnonzero(lit)
+    lit[candidates] = ~_shadow_blocked(ks, paths.o[candidates], sample.w[candidates], sample.distance[candidates])
     rows = np.flatnonzero(lit)
     if rows.size == 0:
         return
@@ -554,16 +636,19 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
     r_u_light = np.where(sample.delta[rows, None], 0.0, r_u * phase_values * survival)
     mean_r = _mean(r_u * light_pdf + r_u_light)
     counted = mean_r > 0.0
-    contribution = paths.beta[rows] * phase_values * transmittance * sample.radiance[rows] / mean_r[:, None]
+    values = np.where(paths.on_surface[rows, None], phase_values * paths.reflectance[rows], phase_values)
+    contribution = paths.beta[rows] * values * transmittance * sample.radiance[rows] / mean_r[:, None]
     radiance[paths.id[rows[counted]]] += contribution[counted]
 
 
 def _sample_phase(ks, paths, vertex, isotropic):
-    """Phase sampling of the next direction (the hero's phase; MIS pdfs at every wavelength).
+    """Phase sampling of the next direction (the hero's phase; MIS pdfs at every wavelength), or on a surface
+    cosine-weighted sampling (the same pdf at every wavelength: the throughput takes the reflectance).
     Returns which paths continue (those whose hero pdf is positive)."""
     u1, u2 = _draw(paths), _draw(paths)
     new_cos = 1.0 - 2.0 * u1
-    anisotropic = np.flatnonzero(~isotropic)
+    surface = paths.on_surface
+    anisotropic = np.flatnonzero(~isotropic & ~surface)
     medium = _pick_medium(vertex.medium_s[anisotropic, :, 0], _draw(paths, anisotropic))
     for m in range(ks.media.density_scale.shape[0]):
         rows = anisotropic[medium == m]
@@ -571,13 +656,15 @@ def _sample_phase(ks, paths, vertex, isotropic):
             new_cos[rows] = rayleigh_sample_cos(u1[rows])
         else:
             new_cos[rows] = hg_sample_cos(table_at(ks.media.anisotropy, m, on_grid(paths.lams[rows, 0])), u1[rows])
-    direction = _direction(paths.d, new_cos, u2)
+    new_cos[surface] = lambert_sample_cos(u1[surface])
+    direction = _direction(np.where(surface[:, None], paths.normal, paths.d), new_cos, u2)
     phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
                             _mixture_phase(ks, vertex.medium_s, paths.lams, new_cos))
+    phase_values = np.where(surface[:, None], lambert_pdf(new_cos)[:, None], phase_values)
     pdf0 = phase_values[:, :1]
     paths.r_l = paths.r_u / pdf0
-    paths.beta = paths.beta * (phase_values / pdf0)
-    paths.r_u = paths.r_u * (phase_values / pdf0)
+    paths.beta = paths.beta * np.where(surface[:, None], paths.reflectance, phase_values / pdf0)
+    paths.r_u = np.where(surface[:, None], paths.r_u, paths.r_u * (phase_values / pdf0))
     paths.d = _rows(normalize(*_columns(direction)), len(paths))
     paths.scattered[:] = True
     return pdf0[:, 0] > 0.0
@@ -606,17 +693,34 @@ def _scatter(ks, paths, vertex, isotropic, radiance):
 
 
 def _bounce(ks, paths, radiance, fl):
-    """Every live path to its next scattering vertex and past it; returns the paths still alive."""
-    vertex = _free_flight(ks, paths, radiance, fl)
+    """Every live path to its next scattering vertex (in a medium or on a surface) and past it; returns the
+    paths still alive."""
+    t_hit, triangle = _closest_hits(ks, paths.o, paths.d, INF)
+    vertex = _free_flight(ks, paths, radiance, fl, t_hit)
     escaped = vertex.event == EVENT_ESCAPE
-    if escaped.any():
-        _escape(ks, paths.take(escaped), radiance, vertex.survival[escaped])
-    real = (vertex.event == EVENT_SCATTER) & (paths.depth + 1 <= ks.termination.max_depth)
-    paths, vertex = paths.take(real), vertex.take(real)
+    sky, surface = escaped & (triangle < 0), escaped & (triangle >= 0)
+    if sky.any():
+        _escape(ks, paths.take(sky), radiance, vertex.survival[sky])
+    if surface.any():
+        _surface_emission(ks, paths.take(surface), triangle[surface], t_hit[surface], vertex.survival[surface],
+                          radiance)
+    deep_enough = paths.depth + 1 <= ks.termination.max_depth
+    real = (vertex.event == EVENT_SCATTER) & deep_enough
+    surface &= deep_enough
+    arriving = np.flatnonzero(surface)
+    if arriving.size:
+        at_surface = paths.take(arriving)
+        reflects = _arrive_at_surfaces(ks, at_surface, triangle[arriving], t_hit[arriving])
+        for name in ("o", "normal", "reflectance", "on_surface"):
+            getattr(paths, name)[arriving] = getattr(at_surface, name)
+        surface[arriving[~reflects]] = False
+    paths.o[real] = vertex.q[real]
+    paths.on_surface[real] = False
+    moving = real | surface
+    paths, vertex = paths.take(moving), vertex.take(moving)
     if not len(paths):
         return paths
     paths.depth += 1
-    paths.o = vertex.q
     return _scatter(ks, paths, vertex, np.zeros(len(paths), dtype=bool), radiance)
 
 
@@ -642,7 +746,7 @@ def _fluorescent_paths(ks, stream, ids, reservoir, fl):
     paths = _Batch(id=ids, stream=stream, lams=np.zeros((count, 1)), beta=np.ones((count, 1)),
                    r_u=np.ones((count, 1)), r_l=np.ones((count, 1)), o=fl.point[ids, chosen],
                    d=np.tile([0.0, 0.0, 1.0], (count, 1)), depth=fl.depth[ids, chosen],
-                   scattered=np.ones(count, dtype=bool))
+                   scattered=np.ones(count, dtype=bool), **_surface_state(count, 1))
     u = _draw(paths)
     for m in range(ks.media.density_scale.shape[0]):
         dyed = fl.medium[ids, chosen] == m
