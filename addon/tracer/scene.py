@@ -188,6 +188,18 @@ class Light:
 
 
 @dataclass(frozen=True, eq=False)
+class Surface:
+    """An opaque triangle mesh in world space: Lambertian `reflectance`, and `emission` (radiance in
+    W·m⁻²·sr⁻¹·nm⁻¹ leaving both sides) where it is a light."""
+
+    name: str
+    vertices: np.ndarray  # (V, 3) float64, world space
+    triangles: np.ndarray  # (T, 3) indices into vertices
+    reflectance: Spectrum
+    emission: Spectrum | None = None
+
+
+@dataclass(frozen=True, eq=False)
 class Camera:
     """Blender's camera model: looks down its local -Z with +Y up; `to_world` is its world matrix.
     `fov` (radians, perspective) or `ortho_scale` (orthographic) spans the `sensor_fit` axis
@@ -241,6 +253,7 @@ class Scene:
     camera: Camera
     media: tuple[Medium, ...] = ()
     lights: tuple[Light, ...] = ()
+    surfaces: tuple[Surface, ...] = ()
     settings: RenderSettings = field(default_factory=RenderSettings)
 
     def validate(self) -> "Scene":
