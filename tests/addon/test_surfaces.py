@@ -2,12 +2,17 @@
 `addon.nodes.surface`): evaluated triangles in world space, one surface per object and material, diffuse
 albedo and emission from the shader as Cycles means them, and everything else named."""
 
+import math
+
 import numpy as np
 import pytest
 
 from addon.export.scene import export_scene
 from addon.tracer import colorimetry, spectra
-from tests.addon.test_blender_scene import factory_scene, volume_shader
+from tests.addon.test_blender_scene import GREY_DELTA_E, factory_scene, volume_shader
+from tests.support.cycles import NOISE_BOUND, compare
+
+COLOURED_DELTA_E = 1.5  # issue 28's bound for coloured scenes on region means
 
 bpy = pytest.importorskip("bpy")
 
@@ -157,3 +162,59 @@ def test_a_volume_cube_is_a_volume_not_a_surface(factory):
     volume_shader(bpy.data.objects["Cube"].active_material, Density=1.0)
     export = _export()
     assert export.scene.surfaces == () and len(export.scene.media) == 1
+
+
+def _ground(albedo=(0.5, 0.5, 0.5)):
+    """A 10 × 10 diffuse (Lambert) ground under the factory cube."""
+    ground = bpy.data.materials.new("Ground")
+    _surface_shader(ground, "ShaderNodeBsdfDiffuse", Color=albedo, Roughness=0.0)
+    return _plane("Ground", size=10.0, location=(0.0, 0.0, -1.0), material=ground)
+
+
+def test_a_volume_casts_its_shadow_on_a_diffuse_ground_as_in_cycles(factory, tmp_path):
+    """The factory scene's point light (1000 W) and grey World over a grey Principled Volume cube standing on
+    a grey Lambertian ground: the ground, the volume's shadow on it and the light it reflects into the
+    volume agree with Cycles within noise."""
+    volume_shader(bpy.data.objects["Cube"].active_material, Color=(0.8, 0.8, 0.8), Density=1.0)
+    _ground()
+    result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(result)
+    assert result.warnings == []
+    assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
+
+
+def test_a_coloured_ground_under_a_sun_matches_cycles(factory, tmp_path):
+    """A green Lambertian ground under a sun of 3 W/m² at 40° elevation, no World: one bounce, so the
+    upsampled reflectance under the sun gives the RGB's colour (ΔE00 within the coloured bound)."""
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    bpy.data.objects.remove(bpy.data.objects["Cube"])
+    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    factory.collection.objects.link(sun)
+    sun.data.energy, sun.data.angle = 3.0, 0.0
+    sun.rotation_euler = (math.radians(50), 0.0, math.radians(30))
+    _ground((0.2, 0.6, 0.1))
+    camera = factory.camera
+    camera.location, camera.rotation_euler = (0.0, 0.0, 5.0), (0.0, 0.0, 0.0)  # the ground fills the frame
+    result = compare(factory, tmp_path, tracer_spp=16, cycles_spp=16)
+    print(result)
+    assert result.delta_e < COLOURED_DELTA_E and result.z < NOISE_BOUND
+    # the closed form: albedo · E · cos θ / π with E = 3 W/m² of luminance 1 per W/m² (sun at 40° elevation)
+    np.testing.assert_allclose(result.traced, np.array((0.2, 0.6, 0.1)) * 3.0 * math.sin(math.radians(40)) / math.pi,
+                               rtol=0.02)
+
+
+def test_an_emissive_panel_lights_a_volume_as_in_cycles(factory, tmp_path):
+    """A mesh light as the only light: a 1.5 × 1.5 panel with an Emission shader (strength 20, warm white)
+    above a grey volume cube, seen by the camera too."""
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    volume_shader(bpy.data.objects["Cube"].active_material, Color=(0.8, 0.8, 0.8), Density=1.0)
+    glowing = bpy.data.materials.new("Glow")
+    _surface_shader(glowing, "ShaderNodeEmission", Color=(1.0, 0.9, 0.8), Strength=20.0)
+    panel = _plane("Panel", size=1.5, location=(1.0, -1.0, 2.2), material=glowing)
+    panel.rotation_euler = (math.radians(30), 0.0, 0.0)
+    result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(result)
+    assert result.warnings == []
+    assert result.delta_e < COLOURED_DELTA_E and result.z < NOISE_BOUND
