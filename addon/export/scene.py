@@ -9,10 +9,9 @@ Which objects become what (the first material with a volume shader or Spectral V
 - Sun, point, spot and area lights (`lights`); the World, an HDRI included (`world`); the scene camera.
 - Every other object with faces (meshes, curves, text): opaque surfaces, mesh lights where they emit
   (`surfaces`, `nodes.surface`).
-- What is not rendered as set (closures other than diffuse and emission, a Sky Texture, unconvertible
-  node inputs) is named
-  in one warning (`nodes.notes`); nothing is skipped silently. Problems name Blender's objects, lights
-  and World, not the exported indices (`validated`).
+- What is not rendered as set (closures other than diffuse and emission, a Hosek / Wilkie Sky Texture,
+  unconvertible node inputs) is named in one warning (`nodes.notes`); nothing is skipped silently.
+  Problems name Blender's objects, lights and World, not the exported indices (`validated`).
 Spectral materials are per metre, so the scene's Unit Scale scales them (addon.export.media); node
 values are per Blender unit, as in Cycles. Motion blur and
 non-square pixels cannot be rendered: each gives one warning.
@@ -63,7 +62,8 @@ def render_settings(scene) -> RenderSettings:
     return RenderSettings(spp=s.samples, seed=s.seed, max_depth=s.max_bounces,
                           wavelength_sampling=s.wavelength_sampling, wavelengths_per_path=int(s.wavelengths_per_path),
                           lambda_min=s.lambda_min, lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf,
-                          backend=s.backend)
+                          backend=s.backend, noise_threshold=s.adaptive_threshold if s.use_adaptive_sampling else 0.0,
+                          min_samples=s.adaptive_min_samples)
 
 
 def unsupported_settings(scene) -> list[str]:
@@ -144,9 +144,7 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
             object_media, object_surfaces = _object_parts(instance, depsgraph, volume_owners, originals, notes)
             media.extend(object_media)
             surfaces.extend(object_surfaces)
-    world = export_world(settings_scene.world, notes)
-    if world is not None:
-        lights.append(world)
+    lights.extend(export_world(settings_scene.world, notes))
     warning = notes.warning()
     if warning is not None:
         warnings.append(warning)
