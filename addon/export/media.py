@@ -18,19 +18,23 @@ from ..props.spectrum_values import to_spectrum
 from ..nodes.volume import Scattering, has_volume_shader, read_volume_shader
 
 
-def materials(obj, depsgraph=None) -> list:
-    """The materials of an object's slots, evaluated in `depsgraph` when given. A slot its evaluated
-    geometry leaves empty (a Geometry Nodes volume without Set Material) falls back to the object's own
-    slot, as Blender's renderers do."""
+def slot_materials(obj, depsgraph=None) -> list:
+    """The material of each of an object's slots (None where empty), evaluated in `depsgraph` when given. A
+    slot its evaluated geometry leaves empty (a Geometry Nodes volume without Set Material) falls back to
+    the object's own slot, as Blender's renderers do."""
     own = obj.original.material_slots
     found = []
     for index, slot in enumerate(obj.material_slots):
         material = slot.material
         if material is None and index < len(own):
             material = own[index].material
-        if material is not None:
-            found.append(material if depsgraph is None else material.evaluated_get(depsgraph))
+        found.append(material if material is None or depsgraph is None else material.evaluated_get(depsgraph))
     return found
+
+
+def materials(obj, depsgraph=None) -> list:
+    """The materials of an object's slots (`slot_materials` without the empty ones)."""
+    return [material for material in slot_materials(obj, depsgraph) if material is not None]
 
 
 def spectral_material(obj, depsgraph=None):

@@ -7,9 +7,11 @@ Which objects become what (the first material with a volume shader or Spectral V
   Spectral Volume on, from its spectral settings (the object's Density Grid, and the material's
   temperature grid when it glows).
 - Sun, point, spot and area lights (`lights`); the World, an HDRI included (`world`); the scene camera.
-- What is not rendered as set (surfaces, mesh lights, a Hosek / Wilkie Sky Texture, unconvertible node
-  inputs) is named in one warning (`nodes.notes`); nothing is skipped silently. Problems name Blender's objects, lights
-  and World, not the exported indices (`validated`).
+- Every other object with faces (meshes, curves, text): opaque surfaces, mesh lights where they emit
+  (`surfaces`, `nodes.surface`).
+- What is not rendered as set (closures other than diffuse and emission, a Hosek / Wilkie Sky Texture,
+  unconvertible node inputs) is named in one warning (`nodes.notes`); nothing is skipped silently.
+  Problems name Blender's objects, lights and World, not the exported indices (`validated`).
 Spectral materials are per metre, so the scene's Unit Scale scales them (addon.export.media); node
 values are per Blender unit, as in Cycles. Motion blur and
 non-square pixels cannot be rendered: each gives one warning.
@@ -40,9 +42,9 @@ from .lights import export_light
 from .media import export_medium, materials, shader_media, volume_material
 from .meshes import voxelise
 from ..nodes.notes import Notes
-from ..nodes.surface import emits_light
 from .volume_fields import VolumeFields
 from .volumes import volume_grids
+from .surfaces import export_surfaces
 from .world import export_world
 
 
@@ -72,39 +74,35 @@ def unsupported_settings(scene) -> list[str]:
     return warnings
 
 
-def _object_media(instance, depsgraph, volume_owners, originals: bool, notes: Notes) -> list:
-    """The media of one depsgraph instance ([] when it is not a volume; a mesh without a volume material is
-    a surface, named in `notes`). With `originals`, its material's settings are read from the original
-    material (see `export_scene`)."""
+def _object_parts(instance, depsgraph, volume_owners, originals: bool, notes: Notes) -> tuple[list, list]:
+    """(media, surfaces) of one depsgraph instance: a volume's media, or an object's opaque surfaces. With
+    `originals`, its material's settings are read from the original material (see `export_scene`)."""
     obj, matrix = instance.object, instance.matrix_world
     is_volume = obj.type == "VOLUME" or (obj.type == "MESH" and fluid_domain(obj) is not None)
-    if not is_volume and obj.type != "MESH":
-        return []
-    material = volume_material(obj, depsgraph)
+    material = volume_material(obj, depsgraph) if is_volume or obj.type == "MESH" else None
     if material is None:
         if is_volume:
             names = [material.name for material in materials(obj, depsgraph)]
             notes.leave_out("volume without a volume material", obj.name + (f" ({', '.join(names)})" if names else ""),
                             "volumes without a volume material")
-        elif obj.data.polygons:
-            emissive = any(emits_light(material) for material in materials(obj, depsgraph))
-            notes.leave_out(*(("mesh light", obj.name) if emissive else ("surface object", obj.name)))
-        return []
+            return [], []
+        return [], export_surfaces(obj, matrix, depsgraph, notes)
     if obj.type == "MESH" and not is_volume and obj.original in volume_owners and not obj.data.polygons:
-        return []  # Geometry Nodes turned the mesh into a volume: only that volume renders
+        return [], []  # Geometry Nodes turned the mesh into a volume: only that volume renders
     material = material.original if originals else material
     metres_per_unit = depsgraph.scene_eval.unit_settings.scale_length
     if not material.spectral.enabled:
-        return shader_media(obj.name, material, VolumeFields(obj, depsgraph, matrix), notes)
+        return shader_media(obj.name, material, VolumeFields(obj, depsgraph, matrix), notes), []
     if is_volume:
         names = [obj.original.spectral.density_grid]
         if material.spectral.use_blackbody:
             names.append(material.spectral.temperature_grid)
         read = volume_grids if obj.type == "VOLUME" else fluid_grids
         grids = read(obj, depsgraph, names, matrix)
-        return [export_medium(obj.name, material, grids[0], grids[1] if len(grids) > 1 else None, metres_per_unit)]
+        medium = export_medium(obj.name, material, grids[0], grids[1] if len(grids) > 1 else None, metres_per_unit)
+        return [medium], []
     return [export_medium(obj.name, material, voxelise(obj, obj.original.spectral.voxel_size, matrix), None,
-                          metres_per_unit)]
+                          metres_per_unit)], []
 
 
 def _synchronise(depsgraph) -> None:
@@ -133,7 +131,7 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
     settings_scene = depsgraph.scene.original if originals else scene
     warnings, notes = unsupported_settings(scene), Notes()
     camera = view or export_camera(scene, scene.camera.evaluated_get(depsgraph) if scene.camera else None)
-    media, lights = [], []
+    media, lights, surfaces = [], [], []
     volume_owners = {instance.object.original for instance in depsgraph.object_instances
                      if instance.is_instance and instance.object.type == "VOLUME"}
     for instance in depsgraph.object_instances:  # each instance's object lives only for this iteration
@@ -143,17 +141,20 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
             if light is not None:
                 lights.append(light)
         else:
-            media.extend(_object_media(instance, depsgraph, volume_owners, originals, notes))
+            object_media, object_surfaces = _object_parts(instance, depsgraph, volume_owners, originals, notes)
+            media.extend(object_media)
+            surfaces.extend(object_surfaces)
     lights.extend(export_world(settings_scene.world, notes))
     warning = notes.warning()
     if warning is not None:
         warnings.append(warning)
-    if not lights and not any(medium.emits() for medium in media):
+    if not lights and not any(medium.emits() for medium in media) and not any(surface.emission is not None for surface in surfaces):
         raise SpectralError("the scene has no lights: add a sun, point or spot light, give the World a colour, "
-                            "or make a volume glow" + (f" ({warning})" if warning else ""))
+                            "or make a volume or a surface glow" + (f" ({warning})" if warning else ""))
     settings = render_settings(settings_scene)
-    return Export(validated(Scene(camera=camera, media=tuple(media), lights=tuple(lights), settings=settings)),
-                  warnings)
+    scene = Scene(camera=camera, media=tuple(media), lights=tuple(lights), surfaces=tuple(surfaces),
+                  settings=settings)
+    return Export(validated(scene), warnings)
 
 
 def validated(scene: Scene) -> Scene:
@@ -164,7 +165,11 @@ def validated(scene: Scene) -> Scene:
     except SpectralError as problem:
         def name(match):
             kind, index, rest = match.group(1), int(match.group(2)), match.group(3) or ""
-            owner = (scene.lights if kind == "lights" else scene.media)[index]
-            noun = ("World" if owner.kind in ("environment", "sky") else "light") if kind == "lights" else "volume"
+            owner = getattr(scene, kind)[index]
+            if kind == "lights":
+                noun = "World" if owner.kind in ("environment", "sky", "envmap") else "light"
+            else:
+                noun = "volume" if kind == "media" else "surface"
             return f"{noun} {owner.name!r}" + (f" {rest[1:]}" if rest else "")
-        raise SpectralError(re.sub(r"\b(lights|media)\[(\d+)\](\.[\w.\[\]]+)?", name, str(problem))) from None
+        pattern = r"\b(lights|media|surfaces)\[(\d+)\](\.[\w.\[\]]+)?"
+        raise SpectralError(re.sub(pattern, name, str(problem))) from None

@@ -1,26 +1,107 @@
-"""Surface shaders, as far as the export needs them while surfaces are not rendered: whether a material's
-surface emits light (an Emission node, or a Principled BSDF with Emission Strength and a non-black Emission
-Color), which makes its mesh a light that the render report must name."""
+"""A material's surface node tree → what an opaque Lambertian surface of the tracer can render of it.
 
-from .graph import output_source, source
+The tracer's surfaces reflect diffusely and may emit (`tracer.scene.Surface`). From Cycles' closures:
+- Diffuse BSDF: its Color is the albedo (a Roughness above 0, Oren–Nayar in Cycles, renders as Lambert,
+  noted);
+- Principled BSDF: its Base Color is the albedo, and Emission Color × Emission Strength its emission; its
+  specular layer, and Metallic, Transmission, Coat, Sheen and Subsurface where their weights are above 0,
+  are not rendered (noted, once per material);
+- Emission: Color × Strength, emitted on both sides as in Cycles (shadeless: a camera sees the colour);
+- Add Shader adds, Mix Shader weighs by (1 − Fac, Fac); any other BSDF renders as a diffuse surface of its
+  Color (noted).
+A material with nothing linked to its Surface is see-through in Cycles (a volume's box): `None`. An empty
+material slot is Cycles' default surface, a diffuse grey of 0.8.
+Colours become spectra as in the volumes (`graph.reflectance_spectrum`, `graph.emission_spectrum`).
+"""
 
-_EMISSIVE = {"ShaderNodeEmission": ("Strength", "Color"), "ShaderNodeBsdfPrincipled": ("Emission Strength",
-                                                                                        "Emission Color")}
+from dataclasses import dataclass
+
+import numpy as np
+
+from .graph import colour, emission_spectrum, number, output_source, reflectance_spectrum, source
+from .notes import Notes
+
+DEFAULT_ALBEDO = 0.8  # Cycles' surface of an object without a material
+# Principled BSDF inputs whose closure is not rendered when their weight is above 0.
+_PRINCIPLED_LAYERS = (("Metallic", "metallic"), ("Transmission Weight", "transmission"), ("Coat Weight", "coat"),
+                      ("Sheen Weight", "sheen"), ("Subsurface Weight", "subsurface"))
+# Colour input of each BSDF rendered as diffuse.
+_COLOURED = {"ShaderNodeBsdfGlossy": "Color", "ShaderNodeBsdfAnisotropic": "Color", "ShaderNodeBsdfGlass": "Color",
+             "ShaderNodeBsdfRefraction": "Color", "ShaderNodeBsdfTranslucent": "Color",
+             "ShaderNodeBsdfTransparent": "Color", "ShaderNodeBsdfSheen": "Color", "ShaderNodeBsdfToon": "Color",
+             "ShaderNodeSubsurfaceScattering": "Color", "ShaderNodeBsdfMetallic": "Base Color",
+             "ShaderNodeBsdfRayPortal": "Color", "ShaderNodeBsdfHair": "Color", "ShaderNodeBsdfHairPrincipled": "Color"}
 
 
-def _emits(node, seen) -> bool:
-    if node.as_pointer() in seen:
-        return False
-    seen.add(node.as_pointer())
-    if node.bl_idname in _EMISSIVE:
-        strength, colour = (node.inputs[name] for name in _EMISSIVE[node.bl_idname])
-        bright = strength.is_linked or strength.default_value > 0
-        coloured = colour.is_linked or any(value > 0 for value in colour.default_value[:3])
-        return bright and coloured
-    return any(_emits(found[0], seen) for socket in node.inputs if socket.type == "SHADER"
-               for found in [source(socket)] if found is not None)
+@dataclass(frozen=True)
+class SurfaceLook:
+    """Albedo and emitted radiance (W·m⁻²·sr⁻¹·nm⁻¹) over the wavelength grid."""
+
+    reflectance: np.ndarray
+    emission: np.ndarray
+
+    def emits(self) -> bool:
+        return bool(np.any(self.emission > 0))
 
 
-def emits_light(material) -> bool:
-    found = None if material is None else output_source(material.node_tree, "Surface")
-    return found is not None and _emits(found[0], set())
+def default_look() -> SurfaceLook:
+    reflectance = reflectance_spectrum((DEFAULT_ALBEDO,) * 3).values
+    return SurfaceLook(reflectance, np.zeros_like(reflectance))
+
+
+def _principled(node, owner, notes, weight, look):
+    look["reflectance"] += weight * reflectance_spectrum(colour(node, "Base Color", owner, notes)).values
+    strength = max(float(number(node, "Emission Strength", owner, notes)), 0.0)
+    if strength > 0:
+        look["emission"] += weight * strength * emission_spectrum(colour(node, "Emission Color", owner, notes)).values
+    layers = ["specular"] + [name for socket, name in _PRINCIPLED_LAYERS
+                             if socket in node.inputs and float(number(node, socket, owner, notes)) > 0]
+    if float(number(node, "Alpha", owner, notes)) < 1:
+        layers.append("transparency (Alpha)")
+    notes.add(f"{owner} ▸ {node.name}: rendered as its diffuse Base Color, without {', '.join(layers)}")
+
+
+def _closure(node, owner, notes, weight, look):
+    kind = node.bl_idname
+    if kind == "ShaderNodeBsdfPrincipled":
+        _principled(node, owner, notes, weight, look)
+    elif kind == "ShaderNodeBsdfDiffuse":
+        look["reflectance"] += weight * reflectance_spectrum(colour(node, "Color", owner, notes)).values
+        if float(number(node, "Roughness", owner, notes)) > 0:
+            notes.add(f"{owner} ▸ {node.name}: Roughness rendered as 0 (Lambert)")
+    elif kind == "ShaderNodeEmission":
+        strength = max(float(number(node, "Strength", owner, notes)), 0.0)
+        if strength > 0:
+            look["emission"] += weight * strength * emission_spectrum(colour(node, "Color", owner, notes)).values
+    elif kind == "ShaderNodeAddShader":
+        for socket in node.inputs:
+            _follow(socket, owner, notes, weight, look)
+    elif kind == "ShaderNodeMixShader":
+        fac = float(np.clip(number(node, "Fac", owner, notes), 0.0, 1.0))
+        _follow(node.inputs[1], owner, notes, weight * (1.0 - fac), look)
+        _follow(node.inputs[2], owner, notes, weight * fac, look)
+    elif kind in _COLOURED:
+        look["reflectance"] += weight * reflectance_spectrum(colour(node, _COLOURED[kind], owner, notes)).values
+        notes.add(f"{owner} ▸ {node.name}: {node.bl_label or kind} rendered as a diffuse surface of its colour")
+    else:
+        notes.add(f"{owner} ▸ {node.name}: {node.bl_label or kind} is not a surface shader the exporter converts: "
+                  "rendered black")
+
+
+def _follow(socket, owner, notes, weight, look):
+    found = source(socket)
+    if found is not None and weight > 0:
+        _closure(found[0], owner, notes, weight, look)
+
+
+def read_surface_shader(material, notes: Notes) -> SurfaceLook | None:
+    """What the material's surface renders as; None where nothing is linked to its Surface (see-through)."""
+    if material is None or material.node_tree is None:
+        return default_look()
+    found = output_source(material.node_tree, "Surface")
+    if found is None:
+        return None
+    zeros = np.zeros_like(default_look().reflectance)
+    look = {"reflectance": zeros.copy(), "emission": zeros.copy()}
+    _closure(found[0], f"material {material.name!r}", notes, 1.0, look)
+    return SurfaceLook(np.clip(look["reflectance"], 0.0, 1.0), look["emission"])

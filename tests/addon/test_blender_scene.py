@@ -116,11 +116,14 @@ def test_spot_light_colour_and_temperature_as_in_cycles(factory, tmp_path):
 
 
 def test_the_factory_scene_is_no_longer_silent(factory):
-    """Its cube has a surface material: it is named as not rendered, and the World lights the frame."""
+    """Its cube is a diffuse surface (its specular layer named as not rendered), lit by the point light and the
+    World."""
     export = _export()
-    assert export.warnings == ["not rendered: 1 surface object (Cube)"]
+    assert export.warnings == ["material 'Material' ▸ Principled BSDF: rendered as its diffuse Base Color, "
+                               "without specular"]
     kinds = sorted(light.kind for light in export.scene.lights)
     assert kinds == ["environment", "point"] and export.scene.media == ()
+    assert [surface.name for surface in export.scene.surfaces] == ["Cube"]
 
 
 def test_world_colour_is_blenders_by_default_and_the_spectral_world_starts_from_it(factory):
@@ -155,7 +158,7 @@ def test_what_is_not_rendered_is_named_in_one_warning(factory):
     warnings = _export().warnings
     assert len(warnings) == 1
     warning = warnings[0]
-    assert warning.startswith("not rendered: 1 surface object (Plane); 1 World texture (Sky Texture of World 'World', Hosek / Wilkie model); ")
+    assert warning.startswith("not rendered: 1 World texture (Sky Texture of World 'World', Hosek / Wilkie model); ")
     assert "light 'Area': Spread 90° rendered as 180°" in warning
     assert "material 'Material' ▸ Volume Scatter: phase Mie rendered as Henyey–Greenstein" in warning
     assert "material 'Material' ▸ Volume Scatter ▸ Density is driven by 'Noise Texture'" in warning
@@ -178,7 +181,7 @@ def test_spectral_switch_chooses_the_spectral_settings_over_the_nodes(factory):
 def test_a_volume_without_a_volume_shader_is_named_not_an_error(factory):
     factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     bpy.data.objects.remove(bpy.data.objects["Light"])
-    with pytest.raises(SpectralError, match=r"the scene has no lights.*1 surface object \(Cube\)"):
+    with pytest.raises(SpectralError, match=r"the scene has no lights.*'Material' ▸ Principled BSDF"):
         _export()
 
 
@@ -316,18 +319,7 @@ def test_coloured_principled_volume_matches_cycles_within_the_spectral_allowance
     assert result.z < NOISE_BOUND
 
 
-def test_an_emissive_mesh_is_named_as_a_mesh_light_and_errors_name_blender_objects(factory):
-    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.0, 0.0, 3.0))
-    panel = bpy.context.active_object
-    panel.name = "Panel"
-    glowing = bpy.data.materials.new("Glow")
-    volume_shader(glowing, "ShaderNodeEmission", Color=(1.0, 1.0, 1.0), Strength=50.0)  # as a surface:
-    tree = glowing.node_tree
-    output = tree.get_output_node("ALL")
-    tree.links.new(output.inputs["Volume"].links[0].from_socket, output.inputs["Surface"])
-    tree.links.remove(output.inputs["Volume"].links[0])
-    panel.data.materials.append(glowing)
-    assert "1 mesh light (Panel)" in _export().warnings[0]
+def test_errors_name_blender_objects(factory):
     bpy.data.objects["Light"].data.energy = float("inf")
     with pytest.raises(SpectralError, match=r"^light 'Light' strength: "):
         _export()
