@@ -119,6 +119,8 @@ def _check_options(args) -> list[int] | None:
     for (option, path), suffix in zip(outputs.items(), (".exr", ".png")):
         if path is not None:
             image_io.check_destination(frame_path(path, first), suffix)
+    image_io.check_distinct((option, None if path is None else frame_path(path, first))
+                            for option, path in outputs.items())
     return frames
 
 

@@ -92,9 +92,12 @@ def _check_options(args) -> None:
         checks.whole_within(args.seed, "--seed", 0, SEED_MAX)
     if args.timeout is not None and not (math.isfinite(args.timeout) and args.timeout > 0):
         raise SpectralError(f"--timeout: must be a positive number of seconds, found {args.timeout:g}")
-    for path, suffix in ((args.out, ".exr"), (args.png, ".png"), (args.npy, ".npy"), (args.stats, None)):
+    outputs = {"--out": (args.out, ".exr"), "--png": (args.png, ".png"), "--npy": (args.npy, ".npy"),
+               "--stats": (args.stats, None)}
+    for path, suffix in outputs.values():
         if path is not None:
             image_io.check_destination(path, suffix)
+    image_io.check_distinct((option, path) for option, (path, _) in outputs.items())
 
 
 def _render(args) -> int:

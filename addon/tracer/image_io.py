@@ -8,7 +8,8 @@ Image's and the command lines' are named alike and Blender opens every one as th
 All files of one command are written together (`write_all`): each to a temporary name beside its
 destination, and only when every one was written are they renamed into place. A failed or cancelled
 write never leaves a half-written file or clobbers an existing one, and never replaces some files but
-not others. `check_destination` tells before a long render whether a file can be written at all.
+not others. `check_destination` tells before a long render whether a file can be written at all, and
+`check_distinct` that no two outputs name the same file (the second would replace the first).
 """
 
 import os
@@ -72,6 +73,32 @@ def check_destination(path, suffix: str | None = None) -> Path:
     return path
 
 
+def _same_file(first: Path, second: Path) -> bool:
+    """Whether two paths name one file: equal once `..` and symbolic links are resolved, or (both existing)
+    one file by two names (hard links, a case-insensitive file system)."""
+    if first.resolve() == second.resolve():
+        return True
+    try:
+        return os.path.samefile(first, second)
+    except OSError:  # one does not exist (yet): only equal resolved paths name the same file
+        return False
+
+
+def check_distinct(named_paths) -> None:
+    """A SpectralError naming both when two of the (name, path) pairs (None paths skipped) name the same file:
+    the second write would replace the first."""
+    seen = []
+    for name, path in named_paths:
+        if path is None:
+            continue
+        for other_name, other_path in seen:
+            if _same_file(Path(other_path), Path(path)):
+                both = f"{other_path}" if str(other_path) == str(path) else f"{other_path} and {path}"
+                raise SpectralError(f"{other_name} and {name} name the same file ({both}): each output needs a "
+                                    "file of its own, or one would replace the other")
+        seen.append((name, path))
+
+
 def _make_folders(folder: Path) -> list[Path]:
     """Create `folder` and its missing parents; returns those created, deepest first."""
     missing = []
@@ -86,6 +113,7 @@ def _make_folders(folder: Path) -> list[Path]:
 def write_all(outputs: list[Output]) -> list[Path]:
     """Write every output or none (see the module docstring); folders are created as needed and removed
     again when the writing fails. Returns the paths written."""
+    check_distinct((f"the output {output.path}", output.path) for output in outputs)
     for output in outputs:
         check_destination(output.path)
     staged, created, done = [], [], False
