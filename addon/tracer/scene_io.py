@@ -14,6 +14,7 @@ import numpy as np
 from . import checks, spectra
 from .checks import shown
 from .errors import SpectralError
+from .files import IMAGE_LIMIT, SCENE_LIMIT, regular_file
 from .film import check_film_memory, film_bytes
 from .grids import affine_matrix, load_grid, save_grid_npy
 from .scene import (LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
@@ -84,9 +85,7 @@ def _scene_path(path) -> Path:
 
 def _read_json(path: Path):
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SpectralError(f"scene file {path} does not exist") from None
+        text = regular_file(path, "scene file", SCENE_LIMIT).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as problem:
         raise SpectralError(f"scene file {path} cannot be read: {problem}") from None
     try:
@@ -272,11 +271,11 @@ def _image(value, where: str, folder: Path) -> np.ndarray:
     checks its values)."""
     if not isinstance(value, str):
         raise SpectralError(f"{where}: expected the name of a .npy file, found {shown(value)}")
-    path = folder / value
     try:
+        path = regular_file(folder / value, "image file", IMAGE_LIMIT)
         return np.load(path, allow_pickle=False)
-    except FileNotFoundError:
-        raise SpectralError(f"{where}: the file {path} does not exist") from None
+    except SpectralError as problem:
+        raise SpectralError(f"{where}: {problem}") from None
     except (OSError, ValueError) as problem:
         raise SpectralError(f"{where}: the file {path} is not a .npy array: {problem}") from None
 

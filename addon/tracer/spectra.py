@@ -21,6 +21,7 @@ import scipy.constants
 from . import colorimetry
 from .planck import planck_radiance
 from .errors import SpectralError
+from .files import SPECTRUM_LIMIT, regular_file
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
 ILLUMINANT_NAMES = (
@@ -105,21 +106,21 @@ def _float_array(numbers, what: str, name: str) -> np.ndarray:
 
 
 def table(wavelengths, values, name: str = "table") -> Spectrum:
-    """Piecewise-linear spectrum through (λ, value) pairs; 0 outside the tabulated range."""
+    """Piecewise-linear spectrum through (λ, value) pairs, at least two; 0 outside the tabulated range."""
     wavelengths = _float_array(wavelengths, "wavelengths", name)
     values = _float_array(values, "values", name)
     if wavelengths.ndim != 1 or wavelengths.shape != values.shape:
         raise SpectralError(f"spectrum {name!r}: wavelengths and values must be two lists of equal length")
-    if wavelengths.size == 0:
-        raise SpectralError(f"spectrum {name!r} is empty")
+    if wavelengths.size < 2:
+        raise SpectralError(f"spectrum {name!r}: a table needs at least 2 rows (wavelength, value), found "
+                            f"{wavelengths.size}: it is 0 outside the range its rows span; for one value at "
+                            "every wavelength give a constant")
     if not (np.all(np.isfinite(wavelengths)) and np.all(np.isfinite(values))):
         raise SpectralError(f"spectrum {name!r} contains NaN or infinite numbers")
     if np.any(np.diff(wavelengths) <= 0):
         raise SpectralError(f"spectrum {name!r}: wavelengths must increase strictly")
     if wavelengths[-1] < LAMBDA_MIN or wavelengths[0] > LAMBDA_MAX:
         raise SpectralError(f"spectrum {name!r} lies outside {LAMBDA_MIN:g}–{LAMBDA_MAX:g} nm (are the units nm?)")
-    if wavelengths.size == 1:
-        return constant(values[0])
     return Spectrum(np.interp(GRID, wavelengths, values, left=0.0, right=0.0))
 
 
@@ -167,7 +168,7 @@ def _read_csv_rows(path: Path) -> list[tuple[int, float, float]]:
     """(line number, λ, value) of each data row; blank lines and `#` comments are skipped, and the first
     row may be a header (any non-numeric field)."""
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        text = regular_file(path, "spectrum file", SPECTRUM_LIMIT).read_text(encoding="utf-8-sig")
     except OSError as error:
         raise SpectralError(f"cannot read spectrum file {str(path)!r}: {error.strerror}") from None
     except UnicodeDecodeError:
