@@ -21,7 +21,7 @@ from pathlib import Path
 
 from .frame_options import check_frame_paths, frame_path, parse_frames, parse_resolution
 from .tracer import image_io
-from .tracer.cli import EXIT_OK, ProgressBar, run_reporting
+from .tracer.cli import EXIT_OK, ProgressBar, run_reporting, say
 from .tracer.errors import SpectralError
 
 COMMAND = "spectral_render"
@@ -124,9 +124,10 @@ def _check_options(args) -> list[int] | None:
     return frames
 
 
-def render_blend(args):
-    """Open, then export, render and write each frame; yields a one-line summary per frame written.
-    Raises SpectralError on bad input (naming the frame when there are several)."""
+def render_blend(args, written: list):
+    """Open, then export, render and write each frame, adding the paths written to `written`; yields a
+    one-line summary per frame written. Raises SpectralError on bad input (naming the frame when there are
+    several)."""
     frames = _check_options(args)
     scene = open_scene(args.blend, args.scene)
     if args.resolution is not None:
@@ -136,14 +137,14 @@ def render_blend(args):
         scene.render.resolution_percentage = args.percentage
     for frame in frames or [scene.frame_current]:
         try:
-            yield _render_frame(scene, frame, args)
+            yield _render_frame(scene, frame, args, written)
         except SpectralError as problem:
             if frames is None or len(frames) == 1:
                 raise
             raise SpectralError(f"frame {frame}: {problem}") from None
 
 
-def _render_frame(scene, frame: int, args) -> str:
+def _render_frame(scene, frame: int, args, written: list) -> str:
     import bpy
 
     from . import jobs, output
@@ -157,27 +158,29 @@ def _render_frame(scene, frame: int, args) -> str:
         raise SpectralError(job.error)
     denoised, skipped = output.denoising(scene.spectral)
     for warning in job.warnings + ([skipped] if skipped else []):
-        print(f"warning: {warning}", file=sys.stderr)
+        say(f"warning: {warning}", sys.stderr)
     images = output.passes(result.film, region, denoised)
     outputs = [output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
     if args.png is not None:
         outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure))
-    written = image_io.write_all(outputs)
+    paths = image_io.write_all(outputs)
+    written += paths
     spp = scene.spectral.samples if args.spp is None else args.spp
     height, width = images.alpha.shape
-    return (f"wrote {', '.join(map(str, written))} ({width}×{height}, frame {frame}, "
+    return (f"wrote {', '.join(map(str, paths))} ({width}×{height}, frame {frame}, "
             f"{spp} spp, {job.describe()}, {result.seconds:.1f} s)")
 
 
 def main(argv=None, prog="python -m addon.cli render") -> int:
     args = _parser(prog).parse_args(argv)
+    written = []
 
     def command():
-        for summary in render_blend(args):
-            print(summary, flush=True)
+        for summary in render_blend(args, written):
+            say(summary)
         return EXIT_OK
 
-    return run_reporting(command)
+    return run_reporting(command, written)
 
 
 def _command(argv) -> int:

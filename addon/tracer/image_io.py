@@ -12,13 +12,16 @@ not others. `check_destination` tells before a long render whether a file can be
 `check_distinct` that no two outputs name the same file (the second would replace the first).
 """
 
+import errno
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from typing import Callable, NamedTuple
 
 import numpy as np
 
+from .checks import byte_size
 from .errors import SpectralError
 
 
@@ -47,6 +50,15 @@ def _open_image_io():
     return OpenImageIO
 
 
+def why(problem: OSError) -> str:
+    """An OSError in words, a full disk said plainly."""
+    if problem.errno == errno.ENOSPC:
+        return "the disk is full (no space left on the device)"
+    if problem.errno == errno.EDQUOT:
+        return "the disk quota is exceeded (no space left for this user)"
+    return problem.strerror or str(problem)
+
+
 def _existing_ancestor(folder: Path) -> Path:
     while not folder.exists() and folder != folder.parent:
         folder = folder.parent
@@ -69,7 +81,7 @@ def check_destination(path, suffix: str | None = None) -> Path:
         os.close(handle)
         os.unlink(probe)
     except OSError as problem:
-        raise SpectralError(f"cannot write {path}: {problem.strerror or problem}") from None
+        raise SpectralError(f"cannot write {path}: {why(problem)}") from None
     return path
 
 
@@ -127,7 +139,7 @@ def write_all(outputs: list[Output]) -> list[Path]:
                 staged.append(temporary)
                 output.write(temporary)
             except OSError as problem:
-                raise SpectralError(f"cannot write {path}: {problem.strerror or problem}") from None
+                raise SpectralError(f"cannot write {path}: {why(problem)}") from None
             except SpectralError as problem:
                 raise SpectralError(f"cannot write {path}: {problem}") from None
         mode = _new_file_mode()
@@ -136,7 +148,7 @@ def write_all(outputs: list[Output]) -> list[Path]:
                 os.chmod(temporary, mode)  # mkstemp makes files private (0600): give the mode a new file gets
                 os.replace(temporary, output.path)
             except OSError as problem:  # rare after a successful write in the same folder
-                raise SpectralError(f"cannot write {output.path}: {problem.strerror or problem}") from None
+                raise SpectralError(f"cannot write {output.path}: {why(problem)}") from None
         done = True
     finally:
         for temporary in staged:
@@ -164,12 +176,26 @@ def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pix
     if filename.endswith(".exr"):
         spec.attribute("compression", "zip")
     output = oiio.ImageOutput.create(filename)
-    if output is None or not output.open(filename, spec):
+    if output is None:
         raise SpectralError(f"OpenImageIO cannot write it: {oiio.geterror() or 'it gave no reason'}")
-    ok = output.write_image(np.ascontiguousarray(pixels))
-    output.close()
+    ok = output.open(filename, spec) and output.write_image(np.ascontiguousarray(pixels))
+    reason = output.geterror() or oiio.geterror()  # the file's own error first: the global one is often empty
+    ok = output.close() and ok
     if not ok:
-        raise SpectralError(f"OpenImageIO cannot write it: {oiio.geterror() or 'it gave no reason'}")
+        full = _disk_space_short(filename, pixels.nbytes)
+        raise SpectralError(f"OpenImageIO cannot write it: {'; '.join(filter(None, (full, reason))) or 'it gave no reason'}")
+
+
+def _disk_space_short(filename: str, size: int) -> str:
+    """"the disk is full ..." when the disk holding `filename` has less free space than `size` bytes (the
+    uncompressed image: OpenImageIO does not say why a write failed), else ""."""
+    try:
+        free = shutil.disk_usage(Path(filename).absolute().parent).free
+    except OSError:
+        return ""
+    if free >= size:
+        return ""
+    return f"the disk is full ({byte_size(free)} free, the image takes up to {byte_size(size)})"
 
 
 def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None, alpha: np.ndarray | None = None,
