@@ -20,9 +20,10 @@ import sys
 from pathlib import Path
 
 from .frame_options import check_frame_paths, frame_path, parse_frames, parse_resolution
-from .tracer import image_io
+from .tracer import checks, image_io
 from .tracer.cli import EXIT_OK, ProgressBar, run_reporting, say
 from .tracer.errors import SpectralError
+from .tracer.scene import SPP_MAX
 
 COMMAND = "spectral_render"
 CLASSES = ()
@@ -103,8 +104,8 @@ def _limits(owner: str, name: str) -> tuple[int, int]:
 def _check_options(args) -> list[int] | None:
     """Every option's value and the first frame's destinations, before the file is opened; returns the
     frames asked for (None: the file's current frame)."""
-    if args.spp is not None and args.spp < 1:
-        raise SpectralError(f"--spp must be at least 1, got {args.spp}")
+    if args.spp is not None:
+        checks.whole_within(args.spp, "--spp", 1, SPP_MAX)
     frames = None if args.frame is None else [check_frame(args.frame)]
     if args.frames is not None:
         frames = parse_frames(args.frames, _limits("Scene", "frame_current"))

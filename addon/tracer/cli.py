@@ -21,7 +21,11 @@ from pathlib import Path
 from . import checks
 from .errors import SpectralError
 from .progress import TimeLeft
-from .scene import BACKENDS, SEED_MAX
+from .scene import BACKENDS, SEED_MAX, SPP_MAX
+
+TIMEOUT_MAX = 86400.0  # seconds (a day): beyond, Dask's and asyncio's timers overflow
+# Local worker processes: each is a Python process of its own with a copy of the scene.
+WORKERS_MAX = max(256, os.cpu_count() or 1)
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_CRASH, EXIT_INTERRUPTED = 0, 1, 2, 70, 130
 
@@ -110,13 +114,13 @@ def _check_options(args) -> None:
     """The render options' values and every output's destination, before any work is done."""
     from . import image_io
 
-    for option, minimum in (("spp", 1), ("threads", 1), ("workers", 1), ("tile_size", 1)):
+    for option, minimum, maximum in (("spp", 1, SPP_MAX), ("threads", 1, None), ("workers", 1, WORKERS_MAX),
+                                     ("tile_size", 1, None), ("seed", 0, SEED_MAX)):
         if getattr(args, option) is not None:
-            checks.whole_within(getattr(args, option), f"--{option.replace('_', '-')}", minimum)
-    if args.seed is not None:
-        checks.whole_within(args.seed, "--seed", 0, SEED_MAX)
-    if args.timeout is not None and not (math.isfinite(args.timeout) and args.timeout > 0):
-        raise SpectralError(f"--timeout: must be a positive number of seconds, found {args.timeout:g}")
+            checks.whole_within(getattr(args, option), f"--{option.replace('_', '-')}", minimum, maximum)
+    if args.timeout is not None and not (math.isfinite(args.timeout) and 0 < args.timeout <= TIMEOUT_MAX):
+        raise SpectralError(f"--timeout: must be a positive number of seconds, at most {TIMEOUT_MAX:g} (a day), "
+                            f"found {args.timeout:g}")
     outputs = {"--out": (args.out, ".exr"), "--png": (args.png, ".png"), "--npy": (args.npy, ".npy"),
                "--stats": (args.stats, None)}
     for path, suffix in outputs.values():

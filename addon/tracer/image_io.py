@@ -208,8 +208,22 @@ def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = No
     if variance is not None:
         layers.append(variance)
         names += channel_names(VARIANCE, layer)
-    pixels = np.concatenate(layers, axis=2).astype(np.float32)
+    pixels = finite(np.concatenate(layers, axis=2), path)
     return Output(check_destination(path, ".exr"), lambda name: _write_oiio(name, pixels, names, "float"))
+
+
+def finite(pixels: np.ndarray, path) -> np.ndarray:
+    """`pixels` as float32, or a SpectralError when any is not finite there (NaN, or beyond float32's 3.4e38,
+    as the squares of very bright samples are): no file ever holds one."""
+    with np.errstate(over="ignore"):
+        pixels = np.asarray(pixels).astype(np.float32)
+    bad = ~np.isfinite(pixels)
+    if bad.any():
+        row, column = (int(i) for i in np.argwhere(bad)[0][:2])
+        raise SpectralError(f"cannot write {path}: {int(bad.sum())} of its values are NaN or beyond float32's range "
+                            f"(3.4e38), the first at row {row}, column {column}; lower the brightest lights or "
+                            "emission")
+    return pixels
 
 
 def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None,
@@ -227,7 +241,7 @@ def srgb_display(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
 
 def png(path, rgb: np.ndarray, exposure: float = 0.0) -> Output:
     """PNG preview of linear Rec.709 through the Standard (sRGB) view transform."""
-    pixels = srgb_display(rgb, exposure)
+    pixels = srgb_display(finite(rgb, path), exposure)
     return Output(check_destination(path, ".png"), lambda name: _write_oiio(name, pixels, ["R", "G", "B"], "uint8"))
 
 
@@ -238,7 +252,7 @@ def write_png(path, rgb: np.ndarray, exposure: float = 0.0) -> Path:
 
 def npy(path, xyz: np.ndarray) -> Output:
     """XYZ as a float32 array of shape (height, width, 3)."""
-    pixels = xyz.astype(np.float32)
+    pixels = finite(xyz, path)
     return Output(check_destination(path, ".npy"), lambda name: np.save(name, pixels))
 
 

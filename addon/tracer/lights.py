@@ -39,6 +39,18 @@ def kernel_spectrum(light: Light, spectrum: Spectrum | None = None, cmf: str = "
     return values / np.pi if light.kind == "area" else values
 
 
+def peak_emission(light: Light, cmf: str) -> float:
+    """The most the light emits per nm, in its kind's radiant unit (`scene.RADIANT_UNITS`): the peak of its
+    kernel spectrum (of both of a sky's), or of an envmap's brightest texel (inf when that overflows)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        if light.kind == "envmap":
+            basis = np.asarray(light.basis_values(), dtype=np.float64)
+            texels = np.asarray(light.image, dtype=np.float64).reshape(-1, 3)
+            return float(light.strength * (texels.max(axis=0) @ basis).max())
+        spectra_ = [light.spectrum] + ([light.horizon_spectrum] if light.horizon_spectrum is not None else [])
+        return float(max(kernel_spectrum(light, spectrum, cmf).max() for spectrum in spectra_))
+
+
 def proxy_luminance(spd: np.ndarray, cmf: str) -> float:
     """The light-choice proxy of a radiometric spectrum: its luminance Y, or, where more, that of an
     equal-energy spectrum of the same radiant integral (so a light with no visible part, a UV lamp

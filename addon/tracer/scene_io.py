@@ -235,14 +235,14 @@ def _light(value, where: str, folder: Path) -> Light:
     data = _fields(value, where, schema, what=f" for {kind} lights")
     fields = {}
     if kind == "sun":
-        fields["direction"] = _unit(data["direction"], f"{where}.direction")
+        fields["direction"] = checks.unit_vector(data["direction"], f"{where}.direction")
         fields["angle"] = float(np.radians(checks.number(data.get("angle", 0.0), f"{where}.angle")))
     if kind == "sky" and "horizon_spectrum" in data:
         fields["horizon_spectrum"] = _spectrum(data["horizon_spectrum"], f"{where}.horizon_spectrum", folder)
     if kind in ("point", "spot", "area"):
         fields["position"] = checks.vector(data["position"], f"{where}.position")
     if kind == "spot":
-        fields["spot_direction"] = _unit(data["spot_direction"], f"{where}.spot_direction")
+        fields["spot_direction"] = checks.unit_vector(data["spot_direction"], f"{where}.spot_direction")
         size = data.get("spot_size", np.degrees(Light.spot_size))
         fields["spot_size"] = float(np.radians(checks.number(size, f"{where}.spot_size")))
         fields["spot_blend"] = checks.number(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend")
@@ -310,11 +310,6 @@ def _list(value, where: str) -> list:
     if not isinstance(value, list):
         raise SpectralError(f"{where}: expected a list, found {shown(value)}")
     return value
-
-
-def _unit(value, where: str) -> np.ndarray:
-    vector = checks.direction(value, where)
-    return vector / np.linalg.norm(vector)
 
 
 def _spectrum(value, where: str, folder: Path) -> Spectrum:
