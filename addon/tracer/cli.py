@@ -189,7 +189,7 @@ def run_reporting(command, written: list) -> int:
         say(f"error: {error}", sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        say(f"\ninterrupted: {_written_note(written)}", sys.stderr)
+        say("\ninterrupted: " + ("nothing written" if not written else _written_note(written)), sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as error:  # noqa: BLE001 - a bug, reported as one
         say("".join(traceback.format_exc()), sys.stderr, end="")

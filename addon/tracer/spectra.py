@@ -20,6 +20,7 @@ import scipy.constants
 
 from . import colorimetry
 from .planck import planck_radiance
+from .checks import shown
 from .errors import SpectralError
 from .files import SPECTRUM_LIMIT, regular_file
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
@@ -59,6 +60,10 @@ _NM = 1e-9  # metres
 _WIEN_B = scipy.constants.Wien  # m·K
 
 
+class NonFiniteSpectrum(SpectralError):
+    """A spectrum's values would not all be finite (`from_spec` names the description that made them)."""
+
+
 @dataclass(frozen=True, eq=False)
 class Spectrum:
     """A spectral function sampled on GRID (one value per nanometre, 250–830 nm)."""
@@ -70,7 +75,7 @@ class Spectrum:
         if values.shape != GRID.shape:
             raise SpectralError(f"a spectrum needs {GRID.size} values on the 1 nm grid, got shape {values.shape}")
         if not np.all(np.isfinite(values)):
-            raise SpectralError("a spectrum contains NaN or infinite values")
+            raise NonFiniteSpectrum("a spectrum contains NaN or infinite values")
         values = values.copy()
         values.flags.writeable = False
         object.__setattr__(self, "values", values)
@@ -420,8 +425,13 @@ def _from_spec(spec, name: str, base_dir, depth: int) -> Spectrum:
     if _is_number(spec):
         return constant(_finite(spec, f"{name}: the number"))
     if not isinstance(spec, dict) or "type" not in spec:
-        raise SpectralError(f"{name}: a spectrum is a number or an object with a \"type\", got {spec!r}")
-    return _build(spec, name, base_dir, depth)
+        raise SpectralError(f"{name}: a spectrum is a number or an object with a \"type\", got {shown(spec)}")
+    with np.errstate(all="ignore"):  # an overflow is reported below, naming the description
+        try:
+            return _build(spec, name, base_dir, depth)
+        except NonFiniteSpectrum:
+            raise SpectralError(f"{name}: the spectrum {shown(spec)} has values beyond float64's range (1.8e308) "
+                                "or undefined (NaN) at some wavelengths: its numbers are too extreme") from None
 
 
 def to_spec(spectrum: Spectrum) -> dict:
