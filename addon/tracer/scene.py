@@ -518,6 +518,13 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
     if lambda_min >= lambda_max:
         raise SpectralError(f"{where}: the wavelength range {lambda_min:g}–{lambda_max:g} nm is empty "
                             "(lambda_min must be below lambda_max)")
-    checks.whole_within(settings.bands, f"{where}.bands", 1)
+    if checks.whole_within(settings.bands, f"{where}.bands", 1) > 1:
+        from .sampling import band_ranges  # the rule of bands, where they are made
+        from .wavelength_modes import default_band
+
+        try:
+            band_ranges(*default_band(settings), settings.bands)
+        except SpectralError as problem:
+            raise SpectralError(f"{where}.bands: {problem}") from None
     checks.one_of(settings.cmf, f"{where}.cmf", CMFS)
     checks.one_of(settings.backend, f"{where}.backend", BACKENDS)

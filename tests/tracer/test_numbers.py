@@ -99,6 +99,13 @@ def test_integer_settings_are_bounded(write_scene, scene_data, field, value, bou
         load_scene(write_scene(scene_data))
 
 
+def test_more_bands_than_whole_nanometres_are_refused_when_read(write_scene, scene_data):
+    scene_data["render"].update(bands=2**64, lambda_min=400, lambda_max=700)
+    with pytest.raises(SpectralError, match="render.bands: 400–700 nm can be split into 1 to 300 bands of whole "
+                                            "nanometres, not 18446744073709551616"):
+        load_scene(write_scene(scene_data))
+
+
 def _kernel_types(scene, seed: int) -> tuple:
     kernel_scene = lowering.compile_scene(scene)
     return tuple(numba.typeof(argument) for argument in render._tile_arguments(kernel_scene, 0, (0, 1),
