@@ -3,7 +3,6 @@ regular files within a stated size (a FIFO would hang the reader, /dev/zero neve
 refused (a table is 0 outside the range its rows span), and a VDB whose grid names are ambiguous is a clear
 error listing its grids."""
 
-import json
 import os
 import subprocess
 import sys
@@ -14,8 +13,6 @@ import pytest
 
 from addon.tracer import files, grids, scene_io, spectra
 from addon.tracer.errors import SpectralError
-from addon.tracer.scene import Grid
-from tests.tracer.conftest import TINY_INDEX_TO_WORLD
 
 ROOT = Path(__file__).resolve().parents[2]
 
