@@ -14,8 +14,9 @@ Every task carries a fingerprint of what it must run (`fingerprint`: the tracer'
 packages' versions, the scene data, seed and backend); the worker returns the fingerprint of what it ran,
 computed by its own code from its own copy of the scene, and the client adds a result only when the two
 agree. A result that disagrees (a worker with other code, which may have joined mid-render) or comes
-from code that does not say (an old tracer) is dropped and its task re-run on workers known to agree, so
-workers may join and leave at any time and the image stays the single-process one.
+from code that does not say (an old tracer) is dropped and its task re-run only on the workers none of
+whose results was refused, so workers may join and leave at any time and the image stays the
+single-process one.
 Dask is imported only here and only when a farm is opened: the rest of the tracer never needs it (the
 extension bundles Dask's wheels for Blender, which ships none). See docs/distributed.md for starting
 schedulers and workers.
@@ -25,6 +26,7 @@ import asyncio
 import dataclasses
 import functools
 import hashlib
+import itertools
 import logging
 import os
 import signal
@@ -50,6 +52,7 @@ from .scene import Scene, check_settings
 DEFAULT_TIMEOUT = 10.0  # seconds to reach the scheduler and to wait for its first worker
 DEFAULT_TILE_SIZE = 64
 RETRIES = 2  # re-runs of a task that raised; tasks on workers that die are re-run by Dask anyway
+REFUSALS = 8  # results of one task refused (from workers that disagree) before the render gives up
 POLL_SECONDS = 0.02  # how often cancel() is asked while no task completes
 WORKER_CHECK_SECONDS = 1.0
 PACKAGES = ("numpy", "numba", "llvmlite")  # their versions must match between client and workers
@@ -413,9 +416,9 @@ class RenderFarm:
             raise SpectralError(f"the Dask scheduler at {self.address} has no workers (waited {self.timeout:g} s): "
                                 f"start some with `dask worker {self.address}` (docs/distributed.md)") from None
 
-    def check_environment(self) -> set[str]:
+    def check_environment(self) -> None:
         """The scheduler (which unpickles the tasks) and every worker must import this tracer and run the
-        same sources and numeric packages as this process; returns the workers checked."""
+        same sources and numeric packages as this process."""
         expected = environment()
         found = {}
         for role, run in (("scheduler", self.client.run_on_scheduler), ("workers", self.client.run)):
@@ -436,7 +439,6 @@ class RenderFarm:
             if different:
                 raise SpectralError(f"Dask {who} differs from this machine, so its pixels could differ: "
                                     + "; ".join(different) + " (docs/distributed.md)")
-        return {who.removeprefix("worker ") for who in found if who.startswith("worker ")}
 
     # -- rendering
 
@@ -470,7 +472,8 @@ class RenderFarm:
         merger = PassMerger(film, sizes, tiles)
 
         self.wait_for_workers()
-        trusted, refused = self.check_environment(), {}
+        self.check_environment()
+        refused = {}  # worker → the fingerprint of what it ran (None: its code did not say)
         client = self.client
         scene_data = SceneData(bands)
         expected = fingerprint(environment(), scene_data.digest(), seed, backend)
@@ -478,16 +481,16 @@ class RenderFarm:
         setup_seconds = time.perf_counter() - start
 
         token = uuid.uuid4().hex[:12]
-        futures = {}
+        futures, submissions = {}, itertools.count()
 
         def submit(unit: Unit, attempt: int = 0, workers=None):
-            """Submit `unit`'s task (a re-run after a refused result only to `workers`, known to agree)."""
+            """Submit `unit`'s task (a re-run after a refused result only to `workers`)."""
             future = client.submit(render_task, scene_future, unit.band, unit.samples, unit.tile, seed, backend,
                                    threads, expected, key=f"spectral-unit-{token}-{unit.band}-{unit.pass_index}-"
-                                                      f"{unit.tile_index}-{attempt}",
+                                                      f"{unit.tile_index}-{next(submissions)}",
                                    priority=-unit.pass_index, retries=RETRIES, workers=workers,
                                    allow_other_workers=False)
-            futures[future] = (unit, attempt)
+            futures[future] = (unit, attempt, workers)
             return future
 
         for unit in units:
@@ -509,9 +512,15 @@ class RenderFarm:
                         if now - last_check >= WORKER_CHECK_SECONDS:
                             last_check = now
                             alone_since = self._check_alive(alone_since, now)
+                            connected = set(self.workers())
+                            for future, (unit, attempt, workers) in list(futures.items()):
+                                if workers is not None and not set(workers) & connected:
+                                    futures.pop(future).cancel()  # its workers left: to those now connected
+                                    completed.add(submit(unit, attempt, self._not_refused(refused)))
                         time.sleep(POLL_SECONDS)
                         continue
                     alone_since = None
+                    batch = [future for future in batch if future in futures]  # not those cancelled above
                     for future in batch:
                         if future.status == "error":
                             raise _task_error(future, futures[future][0], self.address)
@@ -525,14 +534,15 @@ class RenderFarm:
                         raise SpectralError(f"collecting render results from {self.address} failed: "
                                             f"{type(problem).__name__}: {problem}") from problem
                     for future, result in zip(batch, results):
-                        unit, attempt = futures.pop(future)
+                        unit, attempt, _ = futures.pop(future)
                         worker = self._who_ran(future, result)
                         future.release()
                         if not (isinstance(result, TaskResult) and result.fingerprint == expected):
                             refused[worker] = result.fingerprint if isinstance(result, TaskResult) else None
-                            completed.add(submit(unit, attempt + 1, self._agreeing(trusted, refused)))
+                            if attempt + 1 >= REFUSALS:
+                                raise self._refused_error(refused)
+                            completed.add(submit(unit, attempt + 1, self._not_refused(refused)))
                             continue
-                        trusted.add(worker)
                         merger.add(unit, result.sum_xyz, result.sum_sq)
                         work_done += unit.pixel_samples
                         done += 1
@@ -571,16 +581,15 @@ class RenderFarm:
         except Exception:  # the worker has left with it
             return "an unknown worker"
 
-    def _agreeing(self, trusted: set, refused: dict) -> list[str]:
-        """The workers to re-run a refused task on: those whose results agreed (or that agreed when checked),
-        still connected; an error when none is left."""
-        connected = set(self.workers())
-        agreeing = sorted((trusted - set(refused)) & connected)
-        if not agreeing:
-            raise SpectralError(f"Dask worker(s) {', '.join(sorted(refused))} of {self.address} run other code or "
-                                f"hold other scene data than this machine, so their pixels could differ, and no "
-                                f"worker known to agree is left; the render is incomplete (docs/distributed.md)")
-        return agreeing
+    def _not_refused(self, refused: dict) -> list[str] | None:
+        """The connected workers none of whose results was refused (None when there are none: any worker)."""
+        return sorted(set(self.workers()) - set(refused)) or None
+
+    def _refused_error(self, refused: dict) -> SpectralError:
+        return SpectralError(f"Dask worker(s) {', '.join(sorted(refused))} of {self.address} run other code or hold "
+                             f"other scene data than this machine, so their pixels could differ, and a task was "
+                             f"refused {REFUSALS} times: no worker that agrees takes it; the render is incomplete "
+                             f"(docs/distributed.md)")
 
     def _check_alive(self, alone_since, now):
         """Raise when the scheduler has had no workers for `timeout` seconds during a render."""

@@ -87,7 +87,8 @@ def selection_powers(lights: tuple[Light, ...], spds: np.ndarray, media: tuple[M
         elif light.kind in ("environment", "sky", "envmap"):
             power[index] = np.pi * luminance
         else:
-            distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
+            with np.errstate(over="ignore"):  # a distance beyond float64 is inf: the light then weighs 0
+                distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
             solid_angle = np.pi if light.kind == "area" else 4.0 * np.pi
             power[index] = solid_angle * luminance / distance**2
     return power

@@ -199,7 +199,8 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
                 out["area_span"][index] = 0.5 * np.array([light.size_x * axes[:, 0], light.size_y * axes[:, 1]])
                 out["area_shape"][index] = AREA_SHAPES.index(light.area_shape)
     power = selection_powers(lights, out["spd"], media, cmf)
-    scaled = power / power.max() if count else power  # in [0, 1]: the sum cannot overflow
+    # In [0, 1], so the sum cannot overflow; lights that all weigh nothing (far beyond the media) alike.
+    scaled = power / power.max() if count and power.max() > 0 else np.ones(count)
     out["pmf"] = scaled / scaled.sum() if count else power
     out["power"] = power
     return KernelLights(**out)

@@ -369,6 +369,15 @@ def test_a_worker_with_other_code_joining_mid_render_changes_nothing(fresh_loopb
     assert_same_film(expected, result.film)
 
 
+@pytest.mark.slow
+def test_a_farm_whose_every_worker_disagrees_is_a_clear_error_not_a_hang(loopback, monkeypatch):
+    """Here the client expects another fingerprint than every worker computes: each result is refused, and the
+    render stops once a task has been refused REFUSALS times."""
+    monkeypatch.setattr(distributed, "fingerprint", lambda *parts: "not what any worker runs")
+    with pytest.raises(SpectralError, match=f"run other code .* refused {distributed.REFUSALS} times"):
+        distributed.render(small_scene(spp=4, bands=1), scheduler=loopback.address, tile_size=6, timeout=20)
+
+
 def test_a_result_is_refused_unless_its_fingerprint_is_the_tasks(reference, monkeypatch):
     """The worker's side: a task whose fingerprint is not this process's returns no pixels."""
     scene, _ = reference

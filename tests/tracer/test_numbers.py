@@ -83,6 +83,12 @@ def test_a_direction_of_any_finite_non_zero_length_is_a_direction(write_scene, s
     assert np.isfinite(kernel.pmf).all() and kernel.pmf.sum() == pytest.approx(1)
 
 
+def test_light_choice_stays_a_distribution_when_every_light_weighs_nothing(write_scene, scene_data):
+    scene_data["lights"] = [{"kind": "point", "spectrum": 1.0, "position": [1e200, 0, 0], "unit": "radiant"}]
+    pmf = lowering.compile_scene(load_scene(write_scene(scene_data))).lights.pmf
+    assert pmf.tolist() == [1.0]
+
+
 def test_a_zero_direction_is_still_refused(write_scene, scene_data):
     scene_data["lights"][0]["direction"] = [0, 0, 0]
     with pytest.raises(SpectralError, match=r"lights\[0\].direction: a direction cannot have zero length"):
