@@ -126,3 +126,18 @@ def test_setting_values_never_change_the_kernels_argument_types(tiny_scene):
     largest = _kernel_types(dataclasses.replace(tiny_scene, settings=dataclasses.replace(
         settings, max_depth=DEPTH_MAX, rr_depth=DEPTH_MAX)), 2**64 - 1)
     assert smallest == largest
+
+
+def test_an_unbounded_source_too_bright_for_float32_writes_nothing(write_scene, scene_data, tmp_path, capsys):
+    """A glow is bounded only by the output check: its image cannot be stored, so no file is written."""
+    from addon.tracer import cli
+
+    scene_data["media"][0].update(extinction=0.0, glow={"spectrum": 1e300})
+    scene_data["lights"] = []
+    out = tmp_path / "glow.exr"
+    out.write_bytes(b"previous render")
+    code = cli.main(["render", str(write_scene(scene_data)), "--out", str(out), "--npy", str(tmp_path / "g.npy"),
+                     "--quiet"])
+    assert code == cli.EXIT_BAD_INPUT
+    assert "values are NaN or beyond float32's range (3.4e38)" in capsys.readouterr().err
+    assert out.read_bytes() == b"previous render" and not (tmp_path / "g.npy").exists()
