@@ -130,7 +130,8 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
         note = jobs.kind(settings).viewport_note
         self.viewport_notes = export.warnings + ([] if note is None else [note])
         scene = export.scene
-        scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spp=settings.preview_samples))
+        scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spp=settings.preview_samples,
+                                                                        noise_threshold=0.0))
         viewport.render(scene, settings.scheduler_address, settings.viewport_denoise and denoise_available())
 
     def view_draw(self, context, depsgraph):

@@ -4,16 +4,28 @@ The wheels listed in blender_manifest.toml are downloaded (exact files, no depen
 resolution) into wheels/ when missing. The build runs from a staging copy of the files named in
 the manifest's [build] paths, so a build for a subset of platforms (`--platform linux-x64`, used
 by the tests) carries only that platform's wheels. One zip per platform is written to --out.
+
+The zip carries slimmed copies of the wheels (`slim_wheel`, kept in wheels/slim-<rules digest>/): the
+files in LEFT_OUT, which never run in Blender, are left out, the rest is compressed with LZMA instead of
+Deflate, and RECORD lists what is left. Blender keeps the wheels beside the files it installs from them,
+so both count in the installed size.
 """
 
 import argparse
+import base64
+import csv
+import fnmatch
+import hashlib
 import importlib.util
+import io
+import json
 import re
 import shutil
 import subprocess
 import sys
 import tempfile
 import tomllib
+import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,6 +38,57 @@ PLATFORM_TAGS = {
     "macos-arm64": ("macosx", "arm64"),
     "macos-x64": ("macosx", "x86_64"),
 }
+
+
+# Files of the bundled wheels that never run in Blender (patterns on paths inside a wheel; "*": every
+# wheel). Test suites; colour-science's coverage report (78 MB) and examples; the SciPy subpackages nothing
+# imports at run time (the tracer imports scipy.constants; colour-science imports scipy.optimize, for the
+# Jakob 2019 recovery's L-BFGS-B, and scipy.interpolate, and they import the rest kept), which the
+# packaging tests check by recovering spectra and rendering in the installed extension.
+LEFT_OUT = {
+    "*": ("*/tests/*", "*/test/*"),
+    "colour_science": ("colour/htmlcov/*", "colour/examples/*"),
+    "scipy": tuple(f"scipy/{package}/*" for package in ("cluster", "datasets", "differentiate", "fftpack",
+                                                        "integrate", "io", "misc", "ndimage", "odr", "signal",
+                                                        "stats")),
+}
+
+
+def left_out(distribution: str, path: str) -> bool:
+    """Whether `path`, inside a wheel of `distribution` (its file name's first part), stays out of the zip."""
+    patterns = LEFT_OUT["*"] + LEFT_OUT.get(distribution, ())
+    return any(fnmatch.fnmatchcase(path, pattern) for pattern in patterns)
+
+
+def slim_wheel(source: Path, folder: Path) -> Path:
+    """The copy of wheel `source` in `folder` without the files in LEFT_OUT, LZMA-compressed (made once)."""
+    target = folder / source.name
+    if target.is_file():
+        return target
+    folder.mkdir(parents=True, exist_ok=True)
+    distribution = source.name.split("-")[0]
+    partial = target.with_suffix(".partial")
+    with zipfile.ZipFile(source) as wheel, zipfile.ZipFile(partial, "w", zipfile.ZIP_LZMA) as slim:
+        (record,) = [n for n in wheel.namelist() if n.endswith(".dist-info/RECORD")]
+        rows = io.StringIO()
+        listing = csv.writer(rows, lineterminator="\n")
+        for info in wheel.infolist():
+            if info.filename == record or left_out(distribution, info.filename):
+                continue
+            data = wheel.read(info)
+            slim.writestr(info, data, zipfile.ZIP_LZMA)
+            digest = base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=").decode()
+            listing.writerow((info.filename, f"sha256={digest}", len(data)))
+        listing.writerow((record, "", ""))
+        slim.writestr(wheel.getinfo(record), rows.getvalue(), zipfile.ZIP_LZMA)
+    partial.replace(target)
+    return target
+
+
+def slim_folder() -> Path:
+    """Where the slimmed wheels are kept: one folder per version of LEFT_OUT."""
+    rules = hashlib.sha256(json.dumps(LEFT_OUT, sort_keys=True).encode()).hexdigest()[:12]
+    return ROOT / "wheels" / f"slim-{rules}"
 
 
 def blender_ext_script() -> Path:
@@ -113,7 +176,7 @@ def build(platforms: list[str], out_dir: Path) -> list[Path]:
                 shutil.copy2(source, stage / entry)
         (stage / "wheels").mkdir()
         for wheel in wheels:
-            shutil.copy2(ROOT / wheel, stage / "wheels")
+            shutil.copy2(slim_wheel(ROOT / wheel, slim_folder()), stage / "wheels")
         (stage / "blender_manifest.toml").write_text(staged_manifest(manifest_text, platforms, wheels))
         run([sys.executable, str(script), "build", "--source-dir", str(stage),
              "--output-dir", str(out_dir), "--split-platforms"])

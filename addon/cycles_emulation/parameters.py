@@ -154,11 +154,11 @@ def reference_spectrum(lights, media=()) -> np.ndarray | None:
 
 
 def require_emulable(scene: Scene) -> None:
-    """Refuse what the emulation cannot render at all: an HDRI World (its per-texel spectra have no band
-    colours here)."""
+    """Refuse what the emulation cannot render at all: an HDRI or Sky Texture World (an envmap: its per-texel
+    spectra have no band colours here)."""
     for light in scene.lights:
         if light.kind == "envmap":
-            raise SpectralError(f"the Cycles emulation does not render an HDRI World ({light.name or 'envmap'!r}); "
+            raise SpectralError(f"the Cycles emulation does not render an HDRI or Sky Texture World ({light.name or 'envmap'!r}); "
                                 "render it with the tracer (Render ▸ Renderer: Tracer)")
 
 

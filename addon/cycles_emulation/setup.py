@@ -75,7 +75,7 @@ def lights(borrowed, objects, plan: Plan, members) -> None:
         light = obj.data
         _still(borrowed, light)
         colours = plan.light_colours.get(obj.name)
-        if colours is None:  # not spectral (area lights): its RGB colour upsampled
+        if colours is None:  # a light the exported scene does not hold: its RGB colour upsampled
             colours = parameters.emitter_bands(light.color, plan.bands, plan.cmf)
         _light_colour(borrowed, light, shaders.channels(colours, members))
 

@@ -75,7 +75,7 @@ def _area(light, matrix, name: str, notes) -> dict:
 
 def export_light(obj, matrix, notes) -> Light | None:
     """The tracer light of an evaluated light object at world `matrix` (its own, or its instance's), or
-    None when it gives no light or is not rendered (area lights: named in `notes`)."""
+    None when it gives no light, or when the tracer does not render its kind (named in `notes`)."""
     light = obj.data
     if light.type not in SUPPORTED:
         notes.leave_out(f"{light.type.lower()} light", obj.name)

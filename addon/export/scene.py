@@ -7,8 +7,8 @@ Which objects become what (the first material with a volume shader or Spectral V
   Spectral Volume on, from its spectral settings (the object's Density Grid, and the material's
   temperature grid when it glows).
 - Sun, point, spot and area lights (`lights`); the World, an HDRI included (`world`); the scene camera.
-- What is not rendered as set (surfaces, mesh lights, a Sky Texture, unconvertible node inputs) is named
-  in one warning (`nodes.notes`); nothing is skipped silently. Problems name Blender's objects, lights
+- What is not rendered as set (surfaces, mesh lights, a Hosek / Wilkie Sky Texture, unconvertible node
+  inputs) is named in one warning (`nodes.notes`); nothing is skipped silently. Problems name Blender's objects, lights
   and World, not the exported indices (`validated`).
 Spectral materials are per metre, so the scene's Unit Scale scales them (addon.export.media); node
 values are per Blender unit, as in Cycles. Motion blur and
@@ -60,7 +60,8 @@ def render_settings(scene) -> RenderSettings:
     return RenderSettings(spp=s.samples, seed=s.seed, max_depth=s.max_bounces,
                           wavelength_sampling=s.wavelength_sampling, wavelengths_per_path=int(s.wavelengths_per_path),
                           lambda_min=s.lambda_min, lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf,
-                          backend=s.backend)
+                          backend=s.backend, noise_threshold=s.adaptive_threshold if s.use_adaptive_sampling else 0.0,
+                          min_samples=s.adaptive_min_samples)
 
 
 def unsupported_settings(scene) -> list[str]:
@@ -143,9 +144,7 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
                 lights.append(light)
         else:
             media.extend(_object_media(instance, depsgraph, volume_owners, originals, notes))
-    world = export_world(settings_scene.world, notes)
-    if world is not None:
-        lights.append(world)
+    lights.extend(export_world(settings_scene.world, notes))
     warning = notes.warning()
     if warning is not None:
         warnings.append(warning)

@@ -32,6 +32,10 @@ def new_scene(name: str, width: int, height: int, settings: RenderSettings):
     ours.wavelengths_per_path = str(settings.wavelengths_per_path)
     ours.lambda_min, ours.lambda_max = settings.lambda_min, settings.lambda_max
     ours.cmf, ours.backend = settings.cmf, settings.backend
+    ours.use_adaptive_sampling = settings.noise_threshold > 0
+    if settings.noise_threshold > 0:
+        ours.adaptive_threshold = settings.noise_threshold
+    ours.adaptive_min_samples = settings.min_samples
     scene.frame_start = scene.frame_end = scene.frame_current = 1
     return scene
 

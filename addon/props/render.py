@@ -17,8 +17,20 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
     preview_samples: bpy.props.IntProperty(
         name="Viewport Samples", default=32, min=1, soft_max=4096,
         description="Paths per pixel of the Rendered viewport: it refines its image up to this many, then stops")
+    use_adaptive_sampling: bpy.props.BoolProperty(
+        name="Adaptive Sampling", default=True,
+        description="Stop sampling each pixel once its noise is below the Noise Threshold, as Cycles' adaptive "
+                    "sampling does (F12, Render to Image, command line; the viewport and a render farm take every sample)")
+    adaptive_threshold: bpy.props.FloatProperty(
+        name="Noise Threshold", default=0.01, min=0.0001, max=1.0, soft_min=0.001, precision=4, step=0.1,
+        description="How quiet a pixel must be to stop: the sum of its R, G and B standard errors over the square "
+                    "root of R + G + B (lower: less noise, more time)")
+    adaptive_min_samples: bpy.props.IntProperty(
+        name="Min Samples", default=DEFAULTS.min_samples, min=0, soft_max=4096,
+        description="Samples every pixel takes before it may stop; 0 chooses them from the Noise Threshold "
+                    "(64 at 0.01)")
     denoise: bpy.props.BoolProperty(
-        name="Denoise", default=False,
+        name="Denoise", default=True,
         description="Denoise the final image (F12, Render to Image, command line) with Intel Open Image Denoise: "
                     "the Combined pass and PNGs only; the XYZ and XYZ Variance passes stay as rendered")
     viewport_denoise: bpy.props.BoolProperty(
@@ -37,9 +49,10 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
         ("colour", "Color", "Importance by the color matching functions: least color noise"),
         ("visible", "Visible", "Importance by the eye's sensitivity (pbrt-v4's visible density)"),
         ("light", "Lights", "Importance by the lights' spectra"),
-        ("uniform", "Uniform", "Every wavelength alike (380–700 nm)"),
+        ("uniform", "Uniform", "Every wavelength alike, from Min to Max (360–830 nm by default)"),
         ("d65_rejection", "D65", "Importance by daylight (rejection sampling)"),
-        ("uv", "UV", "Uniform and into the ultraviolet, for fluorescence")])
+        ("uv", "UV", "Uniform from 250 nm to Max, into the ultraviolet (the report's sampler; not needed for "
+                "fluorescence, whose excitation wavelengths are drawn from the dye)")])
     wavelengths_per_path: bpy.props.EnumProperty(
         name="Wavelengths per Path", default=str(DEFAULTS.wavelengths_per_path),
         description="Wavelengths carried by each path",

@@ -7,14 +7,15 @@ not a thread of Blender's own, because Numba's compiler runs Python: in a thread
 third of the time, and Blender's interface, which runs Python for every panel it draws, would lag (measured:
 5 ms on every Python call and stalls of up to 2 s, for minutes; bench/README.md).
 
-A render that starts while the process compiles waits for it (`wait`, cancellable, telling the user why)
-instead of compiling the same kernel a second time; a failed or missing process changes nothing, since the
-render then compiles the kernel itself. The process is left to finish when Blender quits: it only fills the
-cache. It writes what it did to `background-compile.log` in the kernel's cache folder.
+A render that starts while the process compiles waits for it (`wait`, cancellable, telling the user what
+the process said it does: loading or compiling) instead of compiling the same kernel a second time; a
+failed or missing process changes nothing, since the render then compiles the kernel itself. The process
+is left to finish when Blender quits: it only fills the cache. It writes what it does to
+`background-compile.log` in the kernel's cache folder.
 
 The child imports the tracer under this process's package name ("addon.tracer", or
-"bl_ext.<repo>.<extension>.addon.tracer" in Blender), because a kernel cached under one name cannot be
-read under another. Its parent packages are made empty (their `__init__` would import Blender).
+"bl_ext.<repo>.<extension>.addon.tracer" in Blender); its parent packages are made empty (their
+`__init__` would import Blender). The kernel cache is shared by every name (kernels/numba_cache.py).
 """
 
 import contextlib
@@ -47,18 +48,20 @@ getattr(importlib.import_module(package + ".background_compile"), function)()
 
 _lock = threading.Lock()
 _process: subprocess.Popen | None = None
+_started_at = 0.0  # time.time() when `start` started it: an older log is another process's
 
 
 def start() -> bool:
     """Start compiling the kernel in a separate process, unless one was started already (by this process),
     this process has the kernel already, or the environment variable DISABLE_VARIABLE is set. Returns
     whether a process was started."""
-    global _process
+    global _process, _started_at
     if os.environ.get(DISABLE_VARIABLE) or _kernel_loaded():
         return False
     with _lock:
         if _process is not None:
             return False
+        _started_at = time.time()
         _process = subprocess.Popen(child_command("compile_kernel"), env=child_environment(), stdin=subprocess.DEVNULL,
                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                     creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0))  # no console on Windows
@@ -95,19 +98,38 @@ def running() -> bool:
 
 def wait(cancel=None, notice=None) -> bool:
     """Wait for the compile `start` began, if one is running, asking `cancel()` (False when it says stop;
-    the compile goes on) and, if it takes longer than a cache load, telling `notice` the compiling message.
-    True when there is nothing (more) to wait for."""
+    the compile goes on) and telling `notice` what the process says it does (loading or compiling the
+    kernel, kernels/numba_cache.py's notices, in its log). True when there is nothing (more) to wait for."""
     from .kernels import numba_cache
 
-    begun, told = time.perf_counter(), False
+    if not running():
+        return True
+    try:
+        log = numba_cache.kernel_folder() / LOG_NAME
+    except OSError:  # the kernel sources cannot be read to name the folder: wait without notices
+        log = None
+    told = None
     while running():
         if cancel is not None and cancel():
             return False
-        if notice is not None and not told and time.perf_counter() - begun > numba_cache.NOTICE_AFTER_SECONDS:
-            notice(numba_cache.compiling_message())
-            told = True
+        said = _last_notice(log, numba_cache.NOTICES) if notice is not None and log is not None else None
+        if said is not None and said != told:
+            notice(said)
+            told = said
         time.sleep(POLL_SECONDS)
     return True
+
+
+def _last_notice(log: Path, notices: tuple[str, ...]) -> str | None:
+    """The last line of the running process's log that starts with one of `notices` (None before its
+    first, or without a log)."""
+    try:
+        if log.stat().st_mtime < _started_at:
+            return None
+        lines = log.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        return None
+    return next((line for line in reversed(lines) if line.startswith(notices)), None)
 
 
 def describe() -> None:
@@ -132,5 +154,6 @@ def compile_kernel() -> None:
         describe()
         empty = scene(perspective((0.0, -1.0, 0.0), (0.0, 0.0, 0.0), 1, 1, 40.0), (), (environment(),), spp=1)
         begun = time.perf_counter()
-        kernel_ready(numba_backend, compile_scene(empty), 0, None, None)
-        print(f"kernel ready in {time.perf_counter() - begun:.1f} s", flush=True)
+        kernel_ready(numba_backend, compile_scene(empty), 0, None, lambda text: print(text, flush=True))
+        how = "loaded from the cache" if sum(numba_backend.render_tile.stats.cache_hits.values()) else "compiled"
+        print(f"kernel {how} in {time.perf_counter() - begun:.1f} s", flush=True)

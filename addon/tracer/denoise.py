@@ -1,4 +1,5 @@
-"""Denoising of the film's display image with Intel Open Image Denoise (OIDN, through the `pyoidn` package).
+"""Denoising of the film's display image with Intel Open Image Denoise (OIDN): Blender's own library, through
+its C API (ctypes), on the CPU.
 
 A display and output step: it takes the linear Rec.709 image (`Film.rgb()`, HDR) and returns a denoised
 copy; the film's XYZ and variance passes are never changed. OIDN takes no variance, so the variance is
@@ -8,7 +9,17 @@ over a small neighbourhood), the more of the rendered pixel is kept: all of it a
 below `MIN_VARIANCE_SAMPLES` samples (a pixel whose few samples all missed the smoke reads as exact), so
 `denoised_rgb` uses it only from there on. No albedo or normal feature passes: the kernel does not make
 them. Negative RGB (colours outside Rec.709) is clipped to 0 for OIDN's HDR filter.
+
+Blender ships OIDN for Cycles on every platform, so the extension bundles none: inside Blender the library
+is already loaded and is found by its name; elsewhere (the CLI) it is loaded from the library folder of
+the installed `bpy` module or Blender program.
 """
+
+import ctypes
+import importlib.util
+import sys
+import threading
+from pathlib import Path
 
 import numpy as np
 
@@ -17,27 +28,68 @@ from .errors import SpectralError
 PRECISE_ERROR = 0.02  # relative standard error at and above which the denoised pixel is used alone
 MIN_VARIANCE_SAMPLES = 16  # below this many samples per pixel the variance is not used
 NEIGHBOURHOOD = 5  # side of the square over which each pixel's relative error is measured
-QUALITIES = ("high", "balanced", "fast")  # OIDN's: final renders, interactive, fastest
+QUALITIES = {"high": 6, "balanced": 5, "fast": 4}  # OIDN's (OIDNQuality): final renders, interactive, fastest
+
+LIBRARY = {"win32": "OpenImageDenoise.dll", "darwin": "libOpenImageDenoise.2.dylib"}.get(
+    sys.platform, "libOpenImageDenoise.so.2")
+_DEVICE_CPU = 1  # OIDN_DEVICE_TYPE_CPU
+_FORMAT_FLOAT3 = 3  # OIDN_FORMAT_FLOAT3
+_SIGNATURES = {  # OIDN 2 C API: name -> (result, arguments)
+    "oidnNewDevice": (ctypes.c_void_p, (ctypes.c_int,)),
+    "oidnCommitDevice": (None, (ctypes.c_void_p,)),
+    "oidnGetDeviceError": (ctypes.c_int, (ctypes.c_void_p, ctypes.POINTER(ctypes.c_char_p))),
+    "oidnNewFilter": (ctypes.c_void_p, (ctypes.c_void_p, ctypes.c_char_p)),
+    "oidnSetSharedFilterImage": (None, (ctypes.c_void_p, ctypes.c_char_p, ctypes.c_void_p, ctypes.c_int,
+                                        ctypes.c_size_t, ctypes.c_size_t, ctypes.c_size_t, ctypes.c_size_t,
+                                        ctypes.c_size_t)),
+    "oidnSetFilterBool": (None, (ctypes.c_void_p, ctypes.c_char_p, ctypes.c_bool)),
+    "oidnSetFilterInt": (None, (ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int)),
+    "oidnCommitFilter": (None, (ctypes.c_void_p,)),
+    "oidnExecuteFilter": (None, (ctypes.c_void_p,)),
+    "oidnReleaseFilter": (None, (ctypes.c_void_p,)),
+}
+
+_loaded = None  # (the OIDN library or None, why not) once `_load` has run
+_lock = threading.Lock()  # one denoise at a time on the shared device
+_device = None  # the committed CPU device, made on first use
 
 
-_loaded = None  # (the `pyoidn` module or None, why not) once `_load` has run: importing it takes 0.1–0.2 s
+def _library_paths():
+    """Where Blender's OIDN may be: by name (already loaded in Blender's process, or on the loader's path),
+    then the library folders of the `bpy` module (bpy/lib) or of a Blender program (beside its version
+    folder, which holds scripts/modules/bpy)."""
+    yield LIBRARY
+    spec = importlib.util.find_spec("bpy")
+    for location in (spec.submodule_search_locations or ()) if spec is not None else ():
+        bpy = Path(location)
+        folders = [bpy / "lib"] + ([bpy.parents[3] / "lib", bpy.parents[3] / "blender.shared"]
+                                   if len(bpy.parents) > 3 else [])
+        yield from (str(folder / LIBRARY) for folder in folders if (folder / LIBRARY).is_file())
 
 
 def _load() -> tuple:
-    """The `pyoidn` module and "", or None and the reason it cannot be used here (imported on first use)."""
+    """Blender's OIDN library and "", or None and the reason it cannot be used here (loaded on first use)."""
     global _loaded
     if _loaded is None:
-        try:
-            import pyoidn
-        except (ImportError, OSError) as problem:  # OSError: the bundled library cannot load on this machine
-            _loaded = None, f"Open Image Denoise is not available on this platform ({problem})"
+        problem = None
+        for path in _library_paths():
+            try:
+                library = ctypes.CDLL(path)
+                for name, (result, arguments) in _SIGNATURES.items():
+                    function = getattr(library, name)
+                    function.restype, function.argtypes = result, arguments
+            except (OSError, AttributeError) as error:  # AttributeError: a library without OIDN 2's API
+                problem = problem or error
+            else:
+                _loaded = library, ""
+                break
         else:
-            _loaded = pyoidn, ""
+            _loaded = None, f"Open Image Denoise is not available on this platform ({problem})"
     return _loaded
 
 
 def available() -> bool:
-    """Whether this machine can denoise (the `pyoidn` package and its OIDN library load)."""
+    """Whether this machine can denoise (Blender's OIDN library loads)."""
     return _load()[0] is not None
 
 
@@ -85,18 +137,50 @@ def denoise(rgb, variance=None, quality: str = "high") -> np.ndarray:
         raise SpectralError(f"denoise quality {quality!r} is not one of {', '.join(QUALITIES)}")
     if variance is not None:
         variance = _check_image("variance", variance, rgb.shape)
-    pyoidn, reason = _load()
-    if pyoidn is None:
+    library, reason = _load()
+    if library is None:
         raise SpectralError(reason)
-    colour = np.ascontiguousarray(np.maximum(rgb, 0.0), dtype=np.float32)
-    try:
-        denoised = pyoidn.denoise(colour, hdr=True, quality=quality)
-    except (RuntimeError, ValueError, TypeError) as problem:
-        raise SpectralError(f"Open Image Denoise failed: {problem}") from problem
+    denoised = _run_filter(library, np.ascontiguousarray(np.maximum(rgb, 0.0), dtype=np.float32), quality)
     if variance is None:
         return denoised
     keep = noisy_weight(rgb, variance)[..., None]
     return (keep * rgb + (1.0 - keep) * denoised).astype(np.float32)
+
+
+def _run_filter(library, colour: np.ndarray, quality: str) -> np.ndarray:
+    """OIDN's "RT" filter (HDR) on `colour`, a contiguous float32 (height, width, 3) image, on the CPU device."""
+    global _device
+    height, width, _ = colour.shape
+    output = np.empty_like(colour)
+    with _lock:
+        if _device is None:
+            _device = library.oidnNewDevice(_DEVICE_CPU)
+            if _device:
+                library.oidnCommitDevice(_device)
+            _check_device(library, _device)
+        flt = library.oidnNewFilter(_device, b"RT")
+        try:
+            for name, image in ((b"color", colour), (b"output", output)):
+                library.oidnSetSharedFilterImage(flt, name, image.ctypes.data, _FORMAT_FLOAT3, width, height, 0, 0, 0)
+            library.oidnSetFilterBool(flt, b"hdr", True)
+            library.oidnSetFilterInt(flt, b"quality", QUALITIES[quality])
+            library.oidnCommitFilter(flt)
+            library.oidnExecuteFilter(flt)
+            _check_device(library, _device)
+        finally:
+            if flt:
+                library.oidnReleaseFilter(flt)
+    return output
+
+
+def _check_device(library, device) -> None:
+    """Raise OIDN's last error on `device` (or that it could not be made) as a SpectralError."""
+    if not device:
+        raise SpectralError("Open Image Denoise failed: it could not make a CPU device")
+    message = ctypes.c_char_p()
+    if library.oidnGetDeviceError(device, ctypes.byref(message)) != 0:
+        text = message.value.decode("utf-8", "replace") if message.value else "no reason given"
+        raise SpectralError(f"Open Image Denoise failed: {text}")
 
 
 def denoised_rgb(film, quality: str = "high") -> np.ndarray:

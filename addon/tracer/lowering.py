@@ -1,4 +1,4 @@
-"""Lowers a `Scene` to the flat arrays the kernels consume (`KernelScene`), for one wavelength band.
+"""Lowers a `Scene` to the arrays the kernels consume (`KernelScene`, grouped by concept), for one wavelength band.
 
 Everything the integrator needs is precomputed here once per band: spectra tabulated on the grid,
 light spectra scaled to their strength and the lights' selection probabilities (`lights`), majorant

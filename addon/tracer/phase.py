@@ -5,7 +5,7 @@ direction and the outgoing propagation direction, so g > 0 scatters forward. Pdf
 
 The kernel-facing functions are plain arithmetic on NumPy ufuncs, without branches on values: the NumPy
 backend calls them on arrays of paths, and they compile unchanged inside Numba kernels (`shared_math.shared`)
-in a kernel) for one path's scalars. A direction is anything indexable by component, `w[0], w[1], w[2]`:
+for one path's scalars. A direction is anything indexable by component, `w[0], w[1], w[2]`:
 a (3,) array or a 3-tuple for one path, a (3, m) array for m paths; directions are returned as 3-tuples
 (of scalars, or of (m,) arrays).
 """

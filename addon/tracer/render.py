@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import sampling
+from . import adaptive, sampling
 from .errors import SpectralError
 from .film import Film
 from .kernels.layout import KernelScene
@@ -117,8 +117,22 @@ class Tiler:
         costs = self.row_cost[y:]
         return np.where(np.isnan(costs), self.cost or 0.0, costs)
 
-    def tiles(self, samples: int) -> Iterator[tuple[int, int, int, int]]:
-        """Tiles (x0, y0, width, height) covering the image once, for a pass of `samples` per pixel."""
+    def tiles(self, samples: int, active: np.ndarray | None = None) -> Iterator[tuple[int, int, int, int]]:
+        """Tiles (x0, y0, width, height) covering the image once, for a pass of `samples` per pixel. With
+        `active` (height, width, bool), each tile is cropped to the box of its active pixels and tiles
+        without any are left out: every active pixel is covered once (and inactive ones inside a box too,
+        which costs some samples but keeps the units few and large)."""
+        for tile in self._full_tiles(samples):
+            if active is None:
+                yield tile
+                continue
+            x0, y0, width, height = tile
+            rows, columns = np.nonzero(active[y0:y0 + height, x0:x0 + width])
+            if rows.size:
+                yield (x0 + int(columns.min()), y0 + int(rows.min()), int(columns.max() - columns.min()) + 1,
+                       int(rows.max() - rows.min()) + 1)
+
+    def _full_tiles(self, samples: int) -> Iterator[tuple[int, int, int, int]]:
         x, y = 0, 0
         while y < self.height:
             most = self.largest * GROWTH // samples  # pixels
@@ -169,7 +183,8 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     done = 0
     cancelled = backend == "numba" and not kernel_ready(module, bands[0], seed, cancel, notice)
     tiler = Tiler(camera.width, camera.height, unit_seconds)
-    for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler):
+    adaptive_state = Adaptive(settings, spp, film)
+    for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler, adaptive_state):
         if cancel is not None and cancel():
             cancelled = True
             break
@@ -182,16 +197,37 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
         film.add(band, tile[1], tile[0], sum_xyz, sum_sq, size)
         done += tile[2] * tile[3] * size
         if progress is not None:
-            progress(film, done / total)
+            progress(film, (done + adaptive_state.skipped * len(bands)) / total)
     seconds = time.perf_counter() - start
     return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend))
 
 
-def _units(spp: int, bands: int, tiler: Tiler):
-    """(band, sample range, tile) of each unit: passes in order, each band's pass tile by tile."""
+class Adaptive:
+    """Adaptive sampling's state in one render (`adaptive`): which pixels the next pass samples, and the
+    pixel-samples left out so far (so that progress still reaches 1)."""
+
+    def __init__(self, settings, spp: int, film: Film):
+        self.threshold, self.spp, self.film, self.skipped = settings.noise_threshold, spp, film, 0
+        self.minimum = adaptive.minimum_samples(self.threshold, settings.min_samples, spp)
+
+    def active(self, begin: int, size: int) -> np.ndarray | None:
+        """The pixels the pass of samples [begin, begin + size) renders; None for all of them."""
+        if self.threshold <= 0 or begin < self.minimum:
+            return None
+        active = adaptive.active_pixels(self.film, self.threshold)
+        self.skipped += int(active.size - np.count_nonzero(active)) * size
+        return active
+
+
+def _units(spp: int, bands: int, tiler: Tiler, adaptive_state: Adaptive | None = None):
+    """(band, sample range, tile) of each unit: passes in order, each band's pass tile by tile (with adaptive
+    sampling, only the pixels still active when the pass begins)."""
     for begin, size in passes(spp):
+        active = None if adaptive_state is None else adaptive_state.active(begin, size)
+        if active is not None and not active.any():
+            continue  # every pixel is done: the remaining passes are skipped
         for band in range(bands):
-            for tile in tiler.tiles(size):
+            for tile in tiler.tiles(size, active):
                 yield band, (begin, begin + size), tile
 
 

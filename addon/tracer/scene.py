@@ -1,9 +1,9 @@
 """The in-memory scene: camera, media, lights and render settings as plain dataclasses.
 
 This is what the scene file (`scene_io`, docs/scene-format.md) loads into and what the add-on's
-exporter builds; the kernels never see it directly (`lowering` lowers it to flat arrays).
-Conventions (DESIGN.md): lengths in Blender units, wavelengths in nm, matrices are 4×4 row-major
-NumPy arrays acting on column vectors (world = M @ [x, y, z, 1]).
+exporter builds; the kernels never see it directly (`lowering` lowers it to `KernelScene`, arrays grouped
+by concept). Conventions (docs/architecture.md, "Data flow"): lengths in Blender units, wavelengths in nm,
+matrices are 4×4 row-major NumPy arrays acting on column vectors (world = M @ [x, y, z, 1]).
 
 A scene checks itself, whoever built it: `Scene.validate()` (called by `scene_io.load_scene` and
 `save_scene` and by `lowering.compile_scene`) raises a SpectralError naming the field by its scene-file
@@ -241,6 +241,10 @@ class RenderSettings:
     bands: int = 1  # per-wavelength passes: the λ range split into this many equal bands
     cmf: str = "cie1931"  # "cie1931" | "wyman1" | "wyman3"
     backend: str = "numba"  # "numba" | "numpy"
+    # Adaptive sampling (`adaptive`): a pixel stops once its error is below this (0: every pixel gets `spp`),
+    # after `min_samples` (0: chosen from the threshold).
+    noise_threshold: float = 0.0
+    min_samples: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -528,3 +532,6 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
             raise SpectralError(f"{where}.bands: {problem}") from None
     checks.one_of(settings.cmf, f"{where}.cmf", CMFS)
     checks.one_of(settings.backend, f"{where}.backend", BACKENDS)
+    checks.within(checks.number(settings.noise_threshold, f"{where}.noise_threshold"), f"{where}.noise_threshold",
+                  0.0, 1.0)
+    checks.whole_within(settings.min_samples, f"{where}.min_samples", 0)

@@ -107,7 +107,7 @@ def _float_array(numbers, what: str, name: str) -> np.ndarray:
     try:
         return np.asarray(numbers, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
-        raise SpectralError(f"spectrum {name!r}: {what} must be a list of numbers") from None
+        raise SpectralError(f"{name}: the spectrum's {what} must be a list of numbers") from None
 
 
 def table(wavelengths, values, name: str = "table") -> Spectrum:
@@ -115,17 +115,17 @@ def table(wavelengths, values, name: str = "table") -> Spectrum:
     wavelengths = _float_array(wavelengths, "wavelengths", name)
     values = _float_array(values, "values", name)
     if wavelengths.ndim != 1 or wavelengths.shape != values.shape:
-        raise SpectralError(f"spectrum {name!r}: wavelengths and values must be two lists of equal length")
+        raise SpectralError(f"{name}: the spectrum's wavelengths and values must be two lists of equal length")
     if wavelengths.size < 2:
-        raise SpectralError(f"spectrum {name!r}: a table needs at least 2 rows (wavelength, value), found "
-                            f"{wavelengths.size}: it is 0 outside the range its rows span; for one value at "
-                            "every wavelength give a constant")
+        raise SpectralError(f"{name}: a table needs at least 2 rows (wavelength, value), found {wavelengths.size}: "
+                            "it is 0 outside the range its rows span; for one value at every wavelength give a "
+                            "constant")
     if not (np.all(np.isfinite(wavelengths)) and np.all(np.isfinite(values))):
-        raise SpectralError(f"spectrum {name!r} contains NaN or infinite numbers")
+        raise SpectralError(f"{name}: the spectrum contains NaN or infinite numbers")
     if np.any(np.diff(wavelengths) <= 0):
-        raise SpectralError(f"spectrum {name!r}: wavelengths must increase strictly")
+        raise SpectralError(f"{name}: the spectrum's wavelengths must increase strictly")
     if wavelengths[-1] < LAMBDA_MIN or wavelengths[0] > LAMBDA_MAX:
-        raise SpectralError(f"spectrum {name!r} lies outside {LAMBDA_MIN:g}–{LAMBDA_MAX:g} nm (are the units nm?)")
+        raise SpectralError(f"{name}: the spectrum lies outside {LAMBDA_MIN:g}–{LAMBDA_MAX:g} nm (are the units nm?)")
     return Spectrum(np.interp(GRID, wavelengths, values, left=0.0, right=0.0))
 
 

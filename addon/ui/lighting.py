@@ -14,7 +14,7 @@ def draw_light(layout, light) -> None:
     tracer's point and spot lights are points, so their Radius is greyed out and says why), then the colour: Blender's Color and
     Temperature, or with Spectral Light on, the spectrum and its unit."""
     if light.type not in SUPPORTED_LIGHTS:
-        layout.label(text=iface_("{} lights are not rendered yet (sun, point, spot are)").format(
+        layout.label(text=iface_("{} lights are not rendered yet (sun, point, spot and area are)").format(
             iface_(light.bl_rna.properties["type"].enum_items[light.type].name)), translate=False, icon="ERROR")
         return
     column = layout.column()

@@ -12,7 +12,15 @@ def draw_render_main(layout, scene) -> None:
     settings = scene.spectral
     layout.prop(settings, "renderer")
     column = layout.column(align=True)
-    column.prop(settings, "samples")
+    row = column.row(heading="Noise Threshold", align=True)
+    row.prop(settings, "use_adaptive_sampling", text="")
+    threshold = row.row()
+    threshold.active = settings.use_adaptive_sampling
+    threshold.prop(settings, "adaptive_threshold", text="")
+    column.prop(settings, "samples", text="Max Samples" if settings.use_adaptive_sampling else "Samples")
+    minimum = column.row()
+    minimum.active = settings.use_adaptive_sampling
+    minimum.prop(settings, "adaptive_min_samples")
     column.prop(settings, "preview_samples", text="Viewport")
     layout.prop(settings, "max_bounces")
     layout.prop(settings, "seed")

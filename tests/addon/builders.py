@@ -93,9 +93,11 @@ def add_fluid_domain(tmp_path, frames=(1,), density=None):
 
 
 def tiny_render(scene, width=16, height=12, samples=2):
+    """A small frame of `samples` per pixel, not denoised (so that F12's Combined is the raw film)."""
     scene.render.resolution_x, scene.render.resolution_y = width, height
     scene.render.resolution_percentage = 100
     scene.spectral.samples = samples
+    scene.spectral.denoise = False
 
 
 def basic_scene(tmp_path):

@@ -12,6 +12,7 @@ import pytest
 from addon.export.scene import export_scene
 from addon.tracer import colorimetry
 from addon.tracer.errors import SpectralError
+from addon.tracer.sky_model import SkyParameters, sun_direction
 from tests.support.cycles import NOISE_BOUND, compare, look_at
 
 bpy = pytest.importorskip("bpy")
@@ -145,6 +146,7 @@ def test_what_is_not_rendered_is_named_in_one_warning(factory):
     area.data.spread = math.radians(90.0)
     world = factory.world.node_tree
     sky = world.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = "HOSEK_WILKIE"
     world.links.new(sky.outputs["Color"], world.nodes["Background"].inputs["Color"])
     fog = volume_shader(_cube_material(), "ShaderNodeVolumeScatter", Color=(0.8, 0.8, 0.8), Density=1.0)
     fog.phase = "MIE"
@@ -153,7 +155,7 @@ def test_what_is_not_rendered_is_named_in_one_warning(factory):
     warnings = _export().warnings
     assert len(warnings) == 1
     warning = warnings[0]
-    assert warning.startswith("not rendered: 1 surface object (Plane); 1 World texture (Sky Texture of World 'World'); ")
+    assert warning.startswith("not rendered: 1 surface object (Plane); 1 World texture (Sky Texture of World 'World', Hosek / Wilkie model); ")
     assert "light 'Area': Spread 90° rendered as 180°" in warning
     assert "material 'Material' ▸ Volume Scatter: phase Mie rendered as Henyey–Greenstein" in warning
     assert "material 'Material' ▸ Volume Scatter ▸ Density is driven by 'Noise Texture'" in warning
@@ -398,6 +400,43 @@ def test_an_hdri_world_lights_the_volume_as_in_cycles(factory, tmp_path, vector_
         tree.links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
     volume_shader(_cube_material(), Color=(0.8, 0.8, 0.8), Density=1.5, Anisotropy=0.3)
     assert [light.kind for light in _export().scene.lights] == ["envmap"]
+    result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(result)
+    assert result.warnings == []
+    assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
+
+
+@pytest.mark.parametrize("model, elevation, rotation, mapped", [
+    ("MULTIPLE_SCATTERING", 15.0, 60.0, False), ("MULTIPLE_SCATTERING", 50.0, 200.0, False),
+    ("SINGLE_SCATTERING", 25.0, 120.0, False), ("MULTIPLE_SCATTERING", 10.0, 60.0, True),
+    ("PREETHAM", 30.0, 60.0, False)],
+    ids=["multiple-15°", "multiple-50°", "single-25°", "multiple-10°-mapped-no-disc", "preetham-30°"])
+def test_a_sky_texture_lights_the_volume_as_in_cycles(factory, tmp_path, model, elevation, rotation, mapped):
+    """A Sky Texture (Strength 0.1) as the only light of a grey cube: the sky as an envmap and its sun disc as
+    a sun light (`tracer.sky_model`; Preetham's sky has no disc, its Sun Direction is the same sun's); without the disc, turned by a Mapping node (Point, 100° about Z). A grey
+    medium transports every colour alike, so the sky's colour asks no spectral allowance. Under a single
+    scattering sky the camera looks up from below the cube: Cycles' ground there (below the horizon) is darker
+    than its source gives (`test_sky_texture.py`)."""
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    tree = factory.world.node_tree
+    sky = tree.nodes.new("ShaderNodeTexSky")
+    sky.sky_type, sky.sun_elevation, sky.sun_rotation = model, math.radians(elevation), math.radians(rotation)
+    sky.sun_direction = sun_direction(SkyParameters(sun_elevation=sky.sun_elevation, sun_rotation=sky.sun_rotation))
+    background = tree.nodes["Background"]
+    tree.links.new(sky.outputs["Color"], background.inputs["Color"])
+    background.inputs["Strength"].default_value = 0.1
+    if mapped:
+        sky.sun_disc = False
+        mapping = tree.nodes.new("ShaderNodeMapping")
+        mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(100.0))
+        tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"], mapping.inputs["Vector"])
+        tree.links.new(mapping.outputs["Vector"], sky.inputs["Vector"])
+    if model == "SINGLE_SCATTERING":  # look up at the cube, the frame all sky (see test_sky_texture.py)
+        camera = bpy.data.objects["Camera"]
+        camera.location.z = -4.0
+        look_at(camera)
+    volume_shader(_cube_material(), Color=(0.8, 0.8, 0.8), Density=1.5, Anisotropy=0.3)
+    assert [light.kind for light in _export().scene.lights] == ["envmap"] + ["sun"] * (not mapped and model != "PREETHAM")
     result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
     print(result)
     assert result.warnings == []

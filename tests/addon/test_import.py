@@ -107,3 +107,17 @@ def test_the_chosen_folder_imports_its_scene_json(registered, tmp_path):
     path = save_scene(_every_feature(), tmp_path / "clouds")
     assert bpy.ops.spectral.import_scene(filepath=str(path.parent)) == {"FINISHED"}
     assert bpy.context.scene.name == "clouds" and (tmp_path / "clouds" / "blender_data" / "Fire.vdb").is_file()
+
+
+def test_a_scene_files_adaptive_sampling_is_imported(registered, tmp_path):
+    """The importer sets Noise Threshold and Min Samples from the file: off where the file has none."""
+    import dataclasses
+
+    from addon.importer.parts import new_scene
+    from addon.tracer.scene import RenderSettings
+
+    fixed = new_scene("Fixed", 8, 8, RenderSettings())
+    assert not fixed.spectral.use_adaptive_sampling
+    adaptive = new_scene("Adaptive", 8, 8, dataclasses.replace(RenderSettings(), noise_threshold=0.05, min_samples=8))
+    assert adaptive.spectral.use_adaptive_sampling and adaptive.spectral.adaptive_threshold == pytest.approx(0.05)
+    assert adaptive.spectral.adaptive_min_samples == 8

@@ -1,4 +1,4 @@
-"""The add-on's layers import one way (../shared/DESIGN.md, "Layers and who may import whom"): the tracer
+"""The add-on's layers import one way (docs/architecture.md, "Layers: who may import whom"): the tracer
 knows nothing of Blender or the add-on; settings (`props`) know nothing of what reads them (export,
 panels, operators, engine). Read from the sources, so a new import that breaks a layer fails here."""
 

@@ -18,7 +18,7 @@ from tests.addon.builders import basic_scene
 bpy = pytest.importorskip("bpy")
 
 ROOT = Path(__file__).resolve().parents[2]
-pytestmark = pytest.mark.slow  # the first render of a process compiles the kernel (about a minute)
+pytestmark = pytest.mark.slow  # the first render compiles the kernel unless cached (minutes: README.md)
 
 
 def _reference(scene):
@@ -195,7 +195,7 @@ def test_job_says_when_the_kernel_compiles_until_rendering_starts(registered, tm
     job = TracerJob(export_scene(bpy.context.evaluated_depsgraph_get()).scene)
     seen = []
     job.run(notice=lambda text: seen.append(job.message))
-    assert len(seen) == 1 and seen[0].startswith("Compiling the kernel (first render only, about ")
+    assert len(seen) == 1 and seen[0].startswith("Compiling the kernel (")
     assert job.message is None and job.succeeded
 
 
@@ -208,7 +208,7 @@ def test_f12_stats_say_when_the_kernel_compiles_then_count_samples(registered, t
     show = SpectralVolumeEngine._show_stats
     monkeypatch.setattr(SpectralVolumeEngine, "_show_stats", lambda self, text: (lines.append(text), show(self, text)))
     assert bpy.ops.render.render() == {"FINISHED"}
-    assert lines[0].startswith("Compiling the kernel (first render only, about ")
+    assert lines[0].startswith("Compiling the kernel (")
     assert lines[-1].startswith(f"{scene.spectral.samples}/{scene.spectral.samples} samples")
 
 

@@ -193,3 +193,19 @@ def test_only_the_generic_panels_that_apply_are_shown(registered):
         assert does_not not in shown
     assert not any(name.startswith(engine.NOT_RENDERED) for name in shown)
     print(f"{len(shown)} generic panels shown")
+
+
+def test_f12_samples_adaptively_and_denoises_by_default_as_cycles_does(registered):
+    """A new scene: Noise Threshold on at 0.01 with automatic Min Samples, Denoise on for renders and off
+    for the viewport, as in Cycles; the export carries the threshold, and turning it off gives 0."""
+    from addon.export.scene import render_settings
+
+    scene = bpy.context.scene
+    settings = scene.spectral
+    assert settings.use_adaptive_sampling and settings.adaptive_threshold == pytest.approx(0.01)
+    assert settings.adaptive_min_samples == 0
+    assert settings.denoise and not settings.viewport_denoise
+    exported = render_settings(scene)
+    assert exported.noise_threshold == pytest.approx(0.01) and exported.min_samples == 0
+    settings.use_adaptive_sampling = False
+    assert render_settings(scene).noise_threshold == 0.0

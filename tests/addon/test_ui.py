@@ -136,10 +136,14 @@ def test_light_shows_blenders_colour_until_spectral_light_is_on(registered):
 
 
 def test_ui_list_draws(registered):
+    """A row of the albedo levels' list shows the level's colour swatch and its density, in one row."""
     scene, volume, material, lights = _scene_with_everything()
     level = material.spectral.albedo_levels[0]
-    bpy.types.SPECTRAL_UL_albedo_levels.draw_item(None, None, RecordingLayout(), material.spectral, level, 0,
+    layout = RecordingLayout()
+    bpy.types.SPECTRAL_UL_albedo_levels.draw_item(None, None, layout, material.spectral, level, 0,
                                                    material.spectral, "albedo_index")
+    swatch, density = layout.index("prop", level.spectrum, "preview"), layout.index("prop", level, "density")
+    assert layout.calls[0][0] == "row" and 0 < swatch < density
 
 
 def test_spectrum_files_may_be_blend_relative(registered, tmp_path):

@@ -95,6 +95,7 @@ def compare(scene, folder: Path, tracer_spp: int, cycles_spp: int, allowance=0.0
 
 
 def look_at(obj, target=(0.0, 0.0, 0.0)) -> None:
+    """Turn a Blender object (a camera, a light: both face their local −Z) towards `target`."""
     direction = np.subtract(target, tuple(obj.location))
     obj.rotation_euler = (math.atan2(math.hypot(direction[0], direction[1]), -direction[2]), 0.0,
-                          math.atan2(direction[1], direction[0]) + math.pi / 2)
+                          math.atan2(direction[1], direction[0]) - math.pi / 2)

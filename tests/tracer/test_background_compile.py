@@ -1,6 +1,6 @@
 """Compiling the kernel in a separate process (addon/tracer/background_compile.py): the child imports the
-tracer under the parent's package name, so it fills the very cache folder the parent reads; a render waits
-for it, and that wait can be cancelled."""
+tracer under the parent's package name and fills the cache folder every import name reads; a render waits
+for it, passing on what it says it does, and that wait can be cancelled."""
 
 import subprocess
 import sys
@@ -14,19 +14,20 @@ from addon.tracer.kernels import numba_cache
 EXTENSION_PACKAGE = "bl_ext.user_default.spectral_volume.addon.tracer"  # as Blender imports the extension
 
 
-def described(package: str, cwd) -> list[str]:
-    command = background_compile.child_command("describe")
+def in_child(function: str, package: str, cwd=None) -> str:
+    """What `function` of background_compile prints, run in a child that imports the tracer as `package`."""
+    command = background_compile.child_command(function)
     command[command.index(background_compile.PACKAGE)] = package
     return subprocess.run(command, env=background_compile.child_environment(), capture_output=True, text=True,
-                          check=True, cwd=cwd).stdout.split()
+                          check=True, cwd=cwd).stdout
 
 
 def test_the_child_imports_the_tracer_under_the_parents_package_name(tmp_path):
-    package, folder = described(background_compile.PACKAGE, tmp_path)  # not run from the repository
+    package, folder = in_child("describe", background_compile.PACKAGE, tmp_path).split()  # not from the repository
     assert package == background_compile.PACKAGE == numba_cache.PACKAGE
     assert folder == str(numba_cache.kernel_folder())
-    extension_package, extension_folder = described(EXTENSION_PACKAGE, tmp_path)
-    assert extension_package == EXTENSION_PACKAGE and extension_folder != folder  # its own cache key
+    extension_package, extension_folder = in_child("describe", EXTENSION_PACKAGE, tmp_path).split()
+    assert extension_package == EXTENSION_PACKAGE and extension_folder == folder  # one cache for both names
 
 
 def test_a_background_compile_fills_this_process_cache_once(monkeypatch):
@@ -39,8 +40,17 @@ def test_a_background_compile_fills_this_process_cache_once(monkeypatch):
     assert background_compile._process.returncode == 0
     folder = numba_cache.kernel_folder()
     log = (folder / background_compile.LOG_NAME).read_text()
-    assert log.startswith(f"{numba_cache.PACKAGE} {folder}") and "kernel ready" in log
+    assert log.startswith(f"{numba_cache.PACKAGE} {folder}") and "\nkernel " in log
     assert list(folder.glob("*.nbi"))  # Numba's cache index, where this process looks for the kernel
+
+
+def test_the_extension_loads_the_kernel_the_checkout_compiled():
+    """The kernel in the cache (compiled under `addon.tracer` by the test above, or earlier) is loaded,
+    not compiled, by the tracer imported under the installed extension's name."""
+    in_child("compile_kernel", background_compile.PACKAGE)
+    in_child("compile_kernel", EXTENSION_PACKAGE)
+    log = (numba_cache.kernel_folder() / background_compile.LOG_NAME).read_text()
+    assert log.startswith(EXTENSION_PACKAGE) and "\nkernel loaded from the cache in " in log, log
 
 
 def test_no_background_compile_when_switched_off(monkeypatch):
@@ -59,15 +69,26 @@ def test_no_background_compile_once_this_process_has_the_kernel(monkeypatch):
     assert not background_compile.start() and not background_compile.started()
 
 
-def test_waiting_for_the_compile_tells_why_and_can_be_cancelled(monkeypatch):
+def test_waiting_for_the_compile_says_what_it_does_and_can_be_cancelled(monkeypatch, tmp_path):
+    monkeypatch.setenv(numba_cache.CACHE_DIR_VARIABLE, str(tmp_path))
+    log = numba_cache.kernel_folder() / background_compile.LOG_NAME
+    log.parent.mkdir(parents=True)
+    log.write_text("Compiling the kernel (about 300 s on this machine)…\n")  # an earlier process's
+    monkeypatch.setattr(background_compile, "_started_at", time.time() + 1.0)
     slow = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     monkeypatch.setattr(background_compile, "_process", slow)
+    said = "Compiling the kernel (about 12 s on this machine)…"
+
+    def cancel():
+        if time.time() > background_compile._started_at + 0.2 and said not in log.read_text():
+            log.write_text(f"{numba_cache.PACKAGE} {log.parent}\n{numba_cache.LOADING_MESSAGE}\n{said}\n")
+        return len(notices) == 1
+
     try:
         notices, begun = [], time.perf_counter()
-        assert not background_compile.wait(cancel=lambda: time.perf_counter() - begun > 1.5,
-                                           notice=notices.append)
+        assert not background_compile.wait(cancel=cancel, notice=notices.append)
         assert time.perf_counter() - begun < 10
-        assert notices == [numba_cache.compiling_message()]  # once, after a cache load's time
+        assert notices == [said]  # its last notice, once; not the older log's
         assert background_compile.running()  # a cancelled wait leaves the compile running
     finally:
         slow.kill()

@@ -192,7 +192,7 @@ def test_the_first_render_says_when_the_kernel_compiles(monkeypatch):
     monkeypatch.setattr(numba_cache, "ready", slow_ready)
     notices = []
     render(furnace(spp=1), notice=notices.append)
-    assert len(notices) == 1 and notices[0].startswith("Compiling the kernel (first render only, about ")
+    assert len(notices) == 1 and notices[0].startswith("Compiling the kernel (")
 
 
 def test_bands_together_estimate_the_whole_spectrum():

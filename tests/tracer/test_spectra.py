@@ -1,7 +1,6 @@
 """Spectra: every source and operation, the CSV reader's checks, and the scene-format round trip."""
 
 import json
-import time
 
 import numpy as np
 import pytest
@@ -32,7 +31,7 @@ def test_constant_table_and_gaussian():
 
 
 def test_table_rejects_non_numbers():
-    with pytest.raises(SpectralError, match="'leaf'.*values must be a list of numbers"):
+    with pytest.raises(SpectralError, match="^leaf: the spectrum's values must be a list of numbers"):
         spectra.table([400, 500], ["a", "b"], name="leaf")
 
 
@@ -249,11 +248,9 @@ def test_from_rgb_red_has_its_energy_at_long_wavelengths():
     assert red[GRID > 600].sum() > red[GRID < 500].sum()
 
 
-def test_from_rgb_is_deterministic_and_fast():
+def test_from_rgb_is_deterministic():
     rgb = (0.3, 0.7, 0.2)
-    start = time.perf_counter()
     first = spectra.from_rgb(rgb)
-    assert time.perf_counter() - start < 1.0
     spectra._from_rgb.cache_clear()
     assert np.array_equal(spectra.from_rgb(rgb).values, first.values)
 

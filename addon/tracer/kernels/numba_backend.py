@@ -19,7 +19,7 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   is added to the path's. The sub-path's own reservoirs give the next (cascades, no recursion).
 - Next-event estimation at every real scattering vertex with ratio-tracked transmittance (residual
   ratio tracking towards delta lights and on grey paths), combined with phase sampling by MIS for
-  environment, sky and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
+  environment, sky, envmaps and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
 - Thermal emission σ_a·Planck(T) and glow (emission that does not depend on absorption) are collected at every
   tentative collision.
 
@@ -31,7 +31,8 @@ the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `geo
 then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`, `Fluorescent`). The
 physics at a point (look-ups, coefficients, phase functions, lights, free paths, the DDA's arithmetic) is the shared
 arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module holds the path's loops
-and state. Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
+and state, and the estimator's arithmetic on them (weight and MIS-ratio updates, contributions, roulette).
+Every function below `_render_samples`, shared ones included, is inlined into it, and the kernel
 scene's arrays are borrowed
 (`_borrowed`): a call that takes the scene costs nothing, where Numba would otherwise update the
 reference count of each of its ~40 arrays (atomic operations that threads contend for) on every call. The

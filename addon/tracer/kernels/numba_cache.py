@@ -3,37 +3,48 @@
 The folder is `$SPECTRAL_VOLUME_CACHE_DIR` when set, else the platform's per-user cache folder
 (`$XDG_CACHE_HOME/spectral_volume` or `~/.cache/spectral_volume` on Linux, `~/Library/Caches/spectral_volume`
 on macOS, `%LOCALAPPDATA%\\spectral_volume\\Cache` on Windows). Inside it, kernels live in one sub-folder per
-key: the kernel sources (Numba's own check sees only the cached function's file, but the kernels inline
-code from several modules), the package the tracer was imported as (a cache written as `addon.tracer`
-cannot be read as `bl_ext.<repo>.spectral_volume.addon.tracer`: its index names the package's classes), the
-Python, Numba and llvmlite versions and the CPU. A cache that cannot be read means a recompile and one
-that cannot be written means none: the cache never fails a render.
+key: the content of the kernel sources (Numba's own check sees only the cached function's file, but the
+kernels inline code from several modules), the Python, Numba and llvmlite versions and the CPU; not the
+name the tracer was imported as. The checkout (`addon.tracer`), the CLI and the installed extension
+(`bl_ext.<repo>.spectral_volume.addon.tracer`) share one kernel: what Numba pickled under one name (the
+classes and modules of the tracer) is read under the current one (`_Unpickler`). A folder that cannot be
+written is still read; a cache that cannot be read means a recompile and one that cannot be written means
+none: the cache never fails a render.
 
 `ready` gets the kernel compiled (or loaded) in a helper thread, so that a render can be cancelled
-and can tell the user while the kernel compiles.
+and can tell the user which of the two it waits for: loading takes seconds, compiling minutes, about as
+long as the last compile on this machine (`COMPILE_SECONDS_FILE`).
 """
 
 import hashlib
+import io
 import json
 import os
+import pickle
+import re
 import sys
 import threading
 import time
 from pathlib import Path
 
-from numba.core.caching import CompileResultCacheImpl, FunctionCache, InTreeCacheLocator, NullCache
+from numba.core import environment
+from numba.core.caching import (CompileResultCacheImpl, FunctionCache, InTreeCacheLocator, IndexDataCacheFile,
+                                NullCache)
 
 APP = "spectral_volume"
 CACHE_DIR_VARIABLE = "SPECTRAL_VOLUME_CACHE_DIR"
 TRACER = Path(__file__).resolve().parent.parent
 PACKAGE = __name__.rpartition(".kernels.")[0]  # "addon.tracer" or "bl_ext.<repo>.spectral_volume.addon.tracer"
+TRACER_MODULE = re.compile(r"^(?:[\w.]+\.)?addon\.tracer(?=\.|$)")  # the tracer's modules, under any import name
 KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.py", "kernels/fluorescent_reservoir.py",
                   "kernels/geometry.py", "kernels/lookups.py", "kernels/dda.py", "kernels/media.py",
                   "kernels/light_sampling.py", "kernels/envmap.py", "phase.py", "binned.py", "planck.py", "shared_math.py",
                   "wavelengths.py")
-COMPILE_SECONDS_FILE = "compile-seconds.txt"
-DEFAULT_COMPILE_SECONDS = 170.0  # until measured here: a cold compile took 170 s of CPU on the 2-core VM (bench/README.md)
-NOTICE_AFTER_SECONDS = 1.0  # loading a cached kernel takes less; compiling it takes minutes
+COMPILE_SECONDS_FILE = "compile-seconds.txt"  # in the cache root: how long the last compile on this machine took
+LOADING_MESSAGE = "Loading the kernel…"
+COMPILING = "Compiling the kernel"
+NOTICES = (LOADING_MESSAGE, COMPILING)  # how every notice of `ready` begins
+NOTICE_AFTER_SECONDS = 1.0  # loading a cached kernel usually takes less; compiling it takes minutes
 POLL_SECONDS = 0.05
 UNUSED_DAYS = 30  # key folders not used for this long (older sources or versions) are removed
 
@@ -72,7 +83,7 @@ def cache_key() -> dict:
     # otherwise (tools/cpu_variants.py compiles for other CPUs).
     cpu = numba.config.CPU_NAME or binding.get_host_cpu_name()
     features = numba.config.CPU_FEATURES if numba.config.CPU_FEATURES is not None else features
-    return {"sources": sources_digest(), "package": PACKAGE, "python": sys.implementation.cache_tag,
+    return {"sources": sources_digest(), "python": sys.implementation.cache_tag,
             "numba": numba.__version__, "llvmlite": llvmlite.__version__, "cpu": cpu, "cpu_features": features}
 
 
@@ -83,16 +94,20 @@ def kernel_folder(root: Path | None = None, key: dict | None = None) -> Path:
 
 
 def _usable_folder() -> Path | None:
-    """The current key's folder, created and marked as used, or None when it cannot be written."""
+    """The current key's folder, created and marked as used where it can be written; None when it neither
+    exists nor can be made."""
     try:
         key = cache_key()
         folder = kernel_folder(key=key)
+    except OSError:  # the sources cannot be read to key it
+        return None
+    try:
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "key.json").write_text(json.dumps(key, indent=1, sort_keys=True))
         _remove_unused(folder.parent, keep=folder)
-        return folder
     except OSError:
-        return None
+        return folder if folder.is_dir() else None  # read-only: its kernels are loaded, new ones not saved
+    return folder
 
 
 def _remove_unused(root: Path, keep: Path) -> None:
@@ -111,7 +126,7 @@ def _remove_unused(root: Path, keep: Path) -> None:
 
 
 class _Locator(InTreeCacheLocator):
-    """Numba's locator, pointed at the current key's kernel folder."""
+    """Numba's locator, pointed at the current key's kernel folder, which need not be writable."""
 
     folder: Path | None = None  # set by `cached`
 
@@ -119,16 +134,71 @@ class _Locator(InTreeCacheLocator):
         super().__init__(py_func, py_file)
         self._cache_path = str(self.folder)
 
+    def ensure_cache_path(self):
+        os.makedirs(self._cache_path, exist_ok=True)  # Numba's also demands a writable folder
+
+
+def _here(module: str) -> str:
+    """`module` with the tracer's package, under whatever name it was pickled, renamed to this one's."""
+    return TRACER_MODULE.sub(PACKAGE, module, count=1)
+
+
+def _rebuild_environment(module, consts, name):
+    """Numba's `_rebuild_env`, which imports the module of a kernel's environment by its pickled name."""
+    return environment._rebuild_env(_here(module), consts, name)
+
+
+class _Unpickler(pickle.Unpickler):
+    """Reads a kernel cache pickled under another import name of the tracer."""
+
+    def find_class(self, module, name):
+        if (module, name) == ("numba.core.environment", "_rebuild_env"):
+            return _rebuild_environment
+        return super().find_class(_here(module), name)
+
+
+def _loads(data: bytes):
+    return _Unpickler(io.BytesIO(data)).load()
+
+
+class _KernelCacheFile(IndexDataCacheFile):
+    """Numba's index and data files, read with `_Unpickler` (Numba's own reading, but for the unpickler)."""
+
+    def _load_index(self):
+        try:
+            with open(self._index_path, "rb") as f:
+                version = pickle.load(f)
+                data = f.read()
+        except FileNotFoundError:
+            return {}
+        if version != self._version:
+            return {}
+        stamp, overloads = _loads(data)
+        return overloads if stamp == self._source_stamp else {}
+
+    def _load_data(self, name):
+        with open(self._data_path(name), "rb") as f:
+            return _loads(f.read())
+
 
 class _KernelCacheImpl(CompileResultCacheImpl):
     _locator_classes = [_Locator]
 
+    def rebuild(self, target_context, payload):
+        payload[1].modname = _here(payload[1].modname)  # the function descriptor's module, looked up by name
+        return super().rebuild(target_context, payload)
+
 
 class KernelCache(FunctionCache):
     """Numba's function cache in the kernel folder, where any failure to load means a recompile and any
-    failure to save means no cache (a cache from another package or version, a corrupt or locked file)."""
+    failure to save means no cache (a cache from another version, a corrupt, locked or read-only file)."""
 
     _impl_class = _KernelCacheImpl
+
+    def __init__(self, py_func):
+        super().__init__(py_func)
+        self._cache_file = _KernelCacheFile(self._cache_path, self._impl.filename_base,
+                                            self._impl.locator.get_source_stamp())
 
     def load_overload(self, sig, target_context):
         try:
@@ -154,12 +224,12 @@ def cached(dispatcher):
     return dispatcher
 
 
-def compile_seconds() -> float:
-    """How long the kernel took to compile the last time it compiled on this computer (a default before)."""
+def compile_seconds() -> float | None:
+    """How long the kernel took to compile the last time it compiled on this computer (None before)."""
     try:
         return float((user_cache_root() / COMPILE_SECONDS_FILE).read_text())
     except (OSError, ValueError):
-        return DEFAULT_COMPILE_SECONDS
+        return None
 
 
 def record_compile_seconds(seconds: float) -> None:
@@ -170,14 +240,19 @@ def record_compile_seconds(seconds: float) -> None:
 
 
 def compiling_message() -> str:
-    """What the user is told while the kernel compiles."""
-    return f"Compiling the kernel (first render only, about {compile_seconds():.0f} s)…"
+    """What the user is told while the kernel compiles: as long as the last compile here took, if timed."""
+    seconds = compile_seconds()
+    if seconds is None:
+        return f"{COMPILING} (the first time on this machine)…"
+    return f"{COMPILING} (about {seconds:.0f} s on this machine)…"
 
 
 def ready(dispatcher, prepare, cancel=None, notice=None) -> bool:
     """Run `prepare()`, which compiles `dispatcher` or loads it from the cache, in a helper thread while
-    asking `cancel()`; if it takes longer than a cache load, tell `notice(compiling_message())`. Returns
-    False when cancelled first (the compile goes on in the background and fills the cache)."""
+    asking `cancel()`; if it takes longer than NOTICE_AFTER_SECONDS, tell `notice` whether it loads
+    (LOADING_MESSAGE) or compiles (`compiling_message()`; Numba counts a cache miss before it compiles),
+    again when that changes. Returns False when cancelled first (the compile goes on in the background
+    and fills the cache)."""
     misses = sum(dispatcher.stats.cache_misses.values())
     failure = []
 
@@ -190,14 +265,16 @@ def ready(dispatcher, prepare, cancel=None, notice=None) -> bool:
     start = time.perf_counter()
     helper = threading.Thread(target=run, name="spectral-kernel-compile", daemon=True)
     helper.start()
-    told = False
+    told = None
     while helper.is_alive():
         helper.join(POLL_SECONDS)
         if cancel is not None and helper.is_alive() and cancel():
             return False
-        if notice is not None and not told and time.perf_counter() - start > NOTICE_AFTER_SECONDS:
-            notice(compiling_message())
-            told = True
+        if notice is not None and helper.is_alive() and time.perf_counter() - start > NOTICE_AFTER_SECONDS:
+            compiling = sum(dispatcher.stats.cache_misses.values()) > misses
+            if told != compiling:
+                notice(compiling_message() if compiling else LOADING_MESSAGE)
+                told = compiling
     if failure:
         raise failure[0]
     if sum(dispatcher.stats.cache_misses.values()) > misses:

@@ -7,7 +7,7 @@ together and are compacted as they end. One `_bounce` takes every live path thro
 the scattering or fluorescent vertex, next-event estimation, phase sampling and Russian roulette. The
 physics at each point is the arithmetic the Numba kernel compiles (look-ups, coefficients, phase functions,
 lights, free paths: docs/algorithm.md), called here on arrays of paths; this module holds
-the wavefront's loops and state.
+the wavefront's loops and state, and the estimator's arithmetic on them (as the Numba kernel holds its own).
 
 Free flight and shadow rays traverse each medium's majorant grid block by block, a DDA vectorised over
 rays (`_tracker_*`, the same state machine as the Numba kernel's, on the shared per-axis arithmetic of
