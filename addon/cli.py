@@ -20,9 +20,10 @@ import sys
 from pathlib import Path
 
 from .frame_options import check_frame_paths, frame_path, parse_frames, parse_resolution
-from .tracer import image_io
-from .tracer.cli import EXIT_OK, ProgressBar, run_reporting
+from .tracer import checks, image_io
+from .tracer.cli import EXIT_OK, ProgressBar, run_reporting, say
 from .tracer.errors import SpectralError
+from .tracer.scene import SPP_MAX
 
 COMMAND = "spectral_render"
 CLASSES = ()
@@ -103,8 +104,8 @@ def _limits(owner: str, name: str) -> tuple[int, int]:
 def _check_options(args) -> list[int] | None:
     """Every option's value and the first frame's destinations, before the file is opened; returns the
     frames asked for (None: the file's current frame)."""
-    if args.spp is not None and args.spp < 1:
-        raise SpectralError(f"--spp must be at least 1, got {args.spp}")
+    if args.spp is not None:
+        checks.whole_within(args.spp, "--spp", 1, SPP_MAX)
     frames = None if args.frame is None else [check_frame(args.frame)]
     if args.frames is not None:
         frames = parse_frames(args.frames, _limits("Scene", "frame_current"))
@@ -119,12 +120,15 @@ def _check_options(args) -> list[int] | None:
     for (option, path), suffix in zip(outputs.items(), (".exr", ".png")):
         if path is not None:
             image_io.check_destination(frame_path(path, first), suffix)
+    image_io.check_distinct((option, None if path is None else frame_path(path, first))
+                            for option, path in outputs.items())
     return frames
 
 
-def render_blend(args):
-    """Open, then export, render and write each frame; yields a one-line summary per frame written.
-    Raises SpectralError on bad input (naming the frame when there are several)."""
+def render_blend(args, written: list):
+    """Open, then export, render and write each frame, adding the paths written to `written`; yields a
+    one-line summary per frame written. Raises SpectralError on bad input (naming the frame when there are
+    several)."""
     frames = _check_options(args)
     scene = open_scene(args.blend, args.scene)
     if args.resolution is not None:
@@ -134,14 +138,14 @@ def render_blend(args):
         scene.render.resolution_percentage = args.percentage
     for frame in frames or [scene.frame_current]:
         try:
-            yield _render_frame(scene, frame, args)
+            yield _render_frame(scene, frame, args, written)
         except SpectralError as problem:
             if frames is None or len(frames) == 1:
                 raise
             raise SpectralError(f"frame {frame}: {problem}") from None
 
 
-def _render_frame(scene, frame: int, args) -> str:
+def _render_frame(scene, frame: int, args, written: list) -> str:
     import bpy
 
     from . import jobs, output
@@ -155,27 +159,29 @@ def _render_frame(scene, frame: int, args) -> str:
         raise SpectralError(job.error)
     denoised, skipped = output.denoising(scene.spectral)
     for warning in job.warnings + ([skipped] if skipped else []):
-        print(f"warning: {warning}", file=sys.stderr)
+        say(f"warning: {warning}", sys.stderr)
     images = output.passes(result.film, region, denoised)
     outputs = [output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
     if args.png is not None:
         outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure))
-    written = image_io.write_all(outputs)
+    paths = image_io.write_all(outputs)
+    written += paths
     spp = scene.spectral.samples if args.spp is None else args.spp
     height, width = images.alpha.shape
-    return (f"wrote {', '.join(map(str, written))} ({width}×{height}, frame {frame}, "
+    return (f"wrote {', '.join(map(str, paths))} ({width}×{height}, frame {frame}, "
             f"{spp} spp, {job.describe()}, {result.seconds:.1f} s)")
 
 
 def main(argv=None, prog="python -m addon.cli render") -> int:
     args = _parser(prog).parse_args(argv)
+    written = []
 
     def command():
-        for summary in render_blend(args):
-            print(summary, flush=True)
+        for summary in render_blend(args, written):
+            say(summary)
         return EXIT_OK
 
-    return run_reporting(command)
+    return run_reporting(command, written)
 
 
 def _command(argv) -> int:

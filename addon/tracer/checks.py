@@ -110,8 +110,21 @@ def matrix3(value, where: str) -> np.ndarray:
 
 
 def direction(value, where: str) -> np.ndarray:
-    """A 3-vector of non-zero length (not normalised)."""
+    """A 3-vector of non-zero length (not normalised; any finite length, 1e-300 or 1e200, is fine)."""
     result = vector(value, where)
-    if not np.linalg.norm(result) > 0:
+    if not np.abs(result).max() > 0:
         raise SpectralError(f"{where}: a direction cannot have zero length")
     return result
+
+
+def unit(vectors: np.ndarray, axis: int = -1) -> np.ndarray:
+    """Finite non-zero vectors (along `axis`) scaled to length 1 without overflow or underflow: each is first
+    divided by its largest component, so that the length of one of length 1e200 is not inf (nor 1e-200's 0)."""
+    vectors = np.asarray(vectors, dtype=np.float64)
+    scaled = vectors / np.abs(vectors).max(axis=axis, keepdims=True)
+    return scaled / np.linalg.norm(scaled, axis=axis, keepdims=True)
+
+
+def unit_vector(value, where: str) -> np.ndarray:
+    """A direction (see `direction`) normalised to length 1."""
+    return unit(direction(value, where))

@@ -5,12 +5,14 @@ a running Dask scheduler's workers (docs/distributed.md); the image is the same 
 
 Exit codes: 0 success, 1 bad input (a SpectralError, message on stderr; no file written or changed),
 2 usage error, 70 internal error (a bug: an unexpected exception, reported with its traceback; no file
-written or changed), 130 interrupted (Ctrl-C; nothing is written).
+written or changed), 130 interrupted (Ctrl-C; nothing is written). A render that has written its files
+exits 0 whatever becomes of its messages: stdout and stderr may be closed, full or a broken pipe (`say`).
 """
 
 import argparse
 import json
 import math
+import os
 import sys
 import time
 import traceback
@@ -19,14 +21,41 @@ from pathlib import Path
 from . import checks
 from .errors import SpectralError
 from .progress import TimeLeft
-from .scene import BACKENDS, SEED_MAX
+from .scene import BACKENDS, SEED_MAX, SPP_MAX
+
+TIMEOUT_MAX = 86400.0  # seconds (a day): beyond, Dask's and asyncio's timers overflow
+# Local worker processes: each is a Python process of its own with a copy of the scene.
+WORKERS_MAX = max(256, os.cpu_count() or 1)
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_CRASH, EXIT_INTERRUPTED = 0, 1, 2, 70, 130
 
 
+def say(text: str, stream=None, end: str = "\n") -> bool:
+    """Write `text` to `stream` (default: sys.stdout now) and flush; False, and the stream's file pointed at
+    the null device, when that fails (a closed, full or broken stream): a lost message must never fail a
+    command, nor the interpreter's last flush of the stream turn its exit code into 120."""
+    stream = sys.stdout if stream is None else stream
+    try:
+        stream.write(text + end)
+        stream.flush()
+        return True
+    except (AttributeError, OSError, ValueError):  # None (closed at start), full, broken pipe, closed
+        _to_null_device(stream)
+        return False
+
+
+def _to_null_device(stream) -> None:
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, stream.fileno())
+        os.close(null)
+    except (AttributeError, OSError, ValueError):
+        pass
+
+
 class ProgressBar:
     """A one-line text progress bar on a stream (default: sys.stderr when made), rewritten in place at most
-    every `interval` seconds; `notice(text)` writes a line above it."""
+    every `interval` seconds; `notice(text)` writes a line above it. A stream that fails is written no more."""
 
     def __init__(self, stream=None, width: int = 30, interval: float = 0.1):
         self.stream, self.width, self.start = stream or sys.stderr, width, time.perf_counter()
@@ -41,15 +70,15 @@ class ProgressBar:
         self.shown = elapsed
         filled = int(round(fraction * self.width))
         left = "" if remaining is None else f", ~{remaining:5.1f}s left"
-        self.stream.write(f"\r[{'#' * filled}{'.' * (self.width - filled)}] {fraction:6.1%} "
-                          f"{elapsed:6.1f}s elapsed{left}")
-        if fraction >= 1:
-            self.stream.write("\n")
-        self.stream.flush()
+        self._write(f"\r[{'#' * filled}{'.' * (self.width - filled)}] {fraction:6.1%} "
+                    f"{elapsed:6.1f}s elapsed{left}", "\n" if fraction >= 1 else "")
 
     def notice(self, text: str) -> None:
-        self.stream.write(f"{text}\n")
-        self.stream.flush()
+        self._write(text, "\n")
+
+    def _write(self, text: str, end: str) -> None:
+        if self.stream is not None and not say(text, self.stream, end):
+            self.stream = None
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -85,19 +114,22 @@ def _check_options(args) -> None:
     """The render options' values and every output's destination, before any work is done."""
     from . import image_io
 
-    for option, minimum in (("spp", 1), ("threads", 1), ("workers", 1), ("tile_size", 1)):
+    for option, minimum, maximum in (("spp", 1, SPP_MAX), ("threads", 1, None), ("workers", 1, WORKERS_MAX),
+                                     ("tile_size", 1, None), ("seed", 0, SEED_MAX)):
         if getattr(args, option) is not None:
-            checks.whole_within(getattr(args, option), f"--{option.replace('_', '-')}", minimum)
-    if args.seed is not None:
-        checks.whole_within(args.seed, "--seed", 0, SEED_MAX)
-    if args.timeout is not None and not (math.isfinite(args.timeout) and args.timeout > 0):
-        raise SpectralError(f"--timeout: must be a positive number of seconds, found {args.timeout:g}")
-    for path, suffix in ((args.out, ".exr"), (args.png, ".png"), (args.npy, ".npy"), (args.stats, None)):
+            checks.whole_within(getattr(args, option), f"--{option.replace('_', '-')}", minimum, maximum)
+    if args.timeout is not None and not (math.isfinite(args.timeout) and 0 < args.timeout <= TIMEOUT_MAX):
+        raise SpectralError(f"--timeout: must be a positive number of seconds, at most {TIMEOUT_MAX:g} (a day), "
+                            f"found {args.timeout:g}")
+    outputs = {"--out": (args.out, ".exr"), "--png": (args.png, ".png"), "--npy": (args.npy, ".npy"),
+               "--stats": (args.stats, None)}
+    for path, suffix in outputs.values():
         if path is not None:
             image_io.check_destination(path, suffix)
+    image_io.check_distinct((option, path) for option, (path, _) in outputs.items())
 
 
-def _render(args) -> int:
+def _render(args, written: list) -> int:
     from . import image_io
     from .render import render
     from .scene_io import load_scene
@@ -123,9 +155,9 @@ def _render(args) -> int:
         outputs.append(image_io.npy(args.npy, film.xyz))
     if args.stats:
         outputs.append(image_io.text(args.stats, json.dumps(result.stats, indent=2)))
-    image_io.write_all(outputs)
-    print(f"wrote {args.out} ({film.width}×{film.height}, {result.stats['samples_per_pixel']} spp, "
-          f"{result.seconds:.1f} s, {result.stats['pixel_samples_per_second']:.0f} pixel-samples/s)")
+    written += image_io.write_all(outputs)
+    say(f"wrote {args.out} ({film.width}×{film.height}, {result.stats['samples_per_pixel']} spp, "
+        f"{result.seconds:.1f} s, {result.stats['pixel_samples_per_second']:.0f} pixel-samples/s)")
     return EXIT_OK
 
 
@@ -133,7 +165,7 @@ def _validate(args) -> int:
     from .scene_io import validate_scene
 
     for line in validate_scene(args.scene):
-        print(line)
+        say(line)
     return EXIT_OK
 
 
@@ -143,23 +175,31 @@ def main(argv=None) -> int:
     if args.command == "render" and args.scheduler is None and args.workers is None:
         if args.tile_size is not None or args.timeout is not None:
             parser.error("--tile-size and --timeout apply to distributed renders: add --scheduler or --workers")
-    return run_reporting(lambda: _render(args) if args.command == "render" else _validate(args))
+    written = []
+    return run_reporting(lambda: _render(args, written) if args.command == "render" else _validate(args), written)
 
 
-def run_reporting(command) -> int:
+def run_reporting(command, written: list) -> int:
     """`command()`'s exit code, with every failure reported on stderr as its exit code says: bad input
-    (SpectralError) as a one-line message, an interruption, or anything else as an internal error."""
+    (SpectralError) as a one-line message, an interruption, or anything else as an internal error.
+    `written` holds the paths the command has written so far (they stay): the messages say what they are."""
     try:
         return command()
     except SpectralError as error:
-        print(f"error: {error}", file=sys.stderr)
+        say(f"error: {error}", sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print("\ninterrupted: nothing written", file=sys.stderr)
+        say("\ninterrupted: " + ("nothing written" if not written else _written_note(written)), sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as error:  # noqa: BLE001 - a bug, reported as one
-        traceback.print_exc()
-        print(f"internal error: {type(error).__name__}: {error}\nThis is a bug in the spectral volume tracer, "
-              "not a problem with your input: please report it on the project's issue tracker with the "
-              "command line and the traceback above. Nothing was written.", file=sys.stderr)
+        say("".join(traceback.format_exc()), sys.stderr, end="")
+        say(f"internal error: {type(error).__name__}: {error}\nThis is a bug in the spectral volume tracer, "
+            "not a problem with your input: please report it on the project's issue tracker with the "
+            f"command line and the traceback above. {_written_note(written)}", sys.stderr)
         return EXIT_CRASH
+
+
+def _written_note(written: list) -> str:
+    if not written:
+        return "Nothing was written."
+    return f"Written before that, and kept: {', '.join(map(str, written))}."

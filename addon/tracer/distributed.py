@@ -9,6 +9,14 @@ whatever order the tasks complete in, so the film's floating-point sums are form
 
 The kernel scenes (one per band, sharing their big arrays) travel once to each worker
 (`Client.scatter(..., broadcast=True)`), not with every task, so no shared file system is needed.
+
+Every task carries a fingerprint of what it must run (`fingerprint`: the tracer's sources, the numeric
+packages' versions, the scene data, seed and backend); the worker returns the fingerprint of what it ran,
+computed by its own code from its own copy of the scene, and the client adds a result only when the two
+agree. A result that disagrees (a worker with other code, which may have joined mid-render) or comes
+from code that does not say (an old tracer) is dropped and its task re-run only on the workers none of
+whose results was refused, so workers may join and leave at any time and the image stays the
+single-process one.
 Dask is imported only here and only when a farm is opened: the rest of the tracer never needs it (the
 extension bundles Dask's wheels for Blender, which ships none). See docs/distributed.md for starting
 schedulers and workers.
@@ -16,7 +24,9 @@ schedulers and workers.
 
 import asyncio
 import dataclasses
+import functools
 import hashlib
+import itertools
 import logging
 import os
 import signal
@@ -28,6 +38,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,6 +52,7 @@ from .scene import Scene, check_settings
 DEFAULT_TIMEOUT = 10.0  # seconds to reach the scheduler and to wait for its first worker
 DEFAULT_TILE_SIZE = 64
 RETRIES = 2  # re-runs of a task that raised; tasks on workers that die are re-run by Dask anyway
+REFUSALS = 8  # results of one task refused (from workers that disagree) before the render gives up
 POLL_SECONDS = 0.02  # how often cancel() is asked while no task completes
 WORKER_CHECK_SECONDS = 1.0
 PACKAGES = ("numpy", "numba", "llvmlite")  # their versions must match between client and workers
@@ -126,21 +138,80 @@ class SceneData:
     """What is scattered to the workers: the kernel scene of each band.
 
     One picklable object rather than a list, so that pickling keeps the arrays the bands share
-    (grids, majorants, light spectra) once instead of once per band."""
+    (grids, majorants, light spectra) once instead of once per band. `digest()` hashes this copy (once per
+    process: it is not pickled, so a worker hashes the copy it received)."""
 
     def __init__(self, band_scenes):
         self.band_scenes = tuple(band_scenes)
 
+    def __getstate__(self):
+        return {"band_scenes": self.band_scenes}
+
+    def digest(self) -> str:
+        if getattr(self, "_digest", None) is None:
+            hasher = hashlib.blake2b(digest_size=32)
+            _hash_value(self.band_scenes, hasher, {})
+            self._digest = hasher.hexdigest()
+        return self._digest
+
+
+def _hash_value(value, hasher, arrays: dict) -> None:
+    """Feed a kernel scene's nested tuples, arrays and numbers to `hasher` (each array's contents hashed once,
+    in `arrays` by id: the bands share their big ones)."""
+    if isinstance(value, tuple):
+        hasher.update(f"({type(value).__name__}:{len(value)}".encode())
+        for item in value:
+            _hash_value(item, hasher, arrays)
+    elif isinstance(value, np.ndarray):
+        if id(value) not in arrays:
+            contents = np.ascontiguousarray(value).reshape(-1).view(np.uint8)
+            arrays[id(value)] = hashlib.blake2b(contents, digest_size=32).digest()
+        hasher.update(f"{value.dtype.str}{value.shape}".encode() + arrays[id(value)])
+    elif isinstance(value, np.generic):  # by its bytes: a NumPy scalar's repr depends on the print options
+        hasher.update(f"{value.dtype.str}".encode() + value.tobytes())
+    else:
+        hasher.update(f"{type(value).__name__}={value!r}".encode())
+
+
+def fingerprint(environment_: dict, scene_digest: str, seed: int, backend: str) -> str:
+    """What a task's result depends on besides its band, samples and tile (which come back with it)."""
+    text = repr((sorted(environment_.items()), scene_digest, int(seed), backend))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class TaskResult(NamedTuple):
+    """A task's answer: the fingerprint of what the worker ran (`fingerprint`), the worker, and the tile's
+    accumulators (None when the worker saw that its fingerprint is not the one asked for)."""
+
+    fingerprint: str
+    worker: str
+    sum_xyz: np.ndarray | None
+    sum_sq: np.ndarray | None
+
 
 def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
-                seed: int, backend: str, threads: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+                seed: int, backend: str, threads: int | None = None, expected: str = "") -> TaskResult:
     """The Dask task: `render.render_unit` for one band, with `threads` kernel threads (by default
-    the worker's cores shared among its Dask threads). Thread counts do not change the result."""
+    the worker's cores shared among its Dask threads), unless this worker's fingerprint is not `expected`.
+    Thread counts do not change the result."""
+    ran = fingerprint(environment(), scene_data.digest(), seed, backend)
+    if ran != expected:
+        return TaskResult(ran, _worker_address(), None, None)
     if backend == "numba":
         from .kernels import numba_backend
 
         numba_backend.set_threads(threads or _threads_per_task())
-    return single.render_unit(scene_data.band_scenes[band], band, samples, tile, seed, backend)
+    return TaskResult(ran, _worker_address(), *single.render_unit(scene_data.band_scenes[band], band, samples, tile,
+                                                                  seed, backend))
+
+
+def _worker_address() -> str:
+    from distributed import get_worker
+
+    try:
+        return get_worker().address
+    except ValueError:  # not inside a worker
+        return "this process"
 
 
 def _threads_per_task() -> int:
@@ -154,6 +225,7 @@ def _threads_per_task() -> int:
     return max(1, numba.config.NUMBA_NUM_THREADS // max(nthreads, 1))
 
 
+@functools.cache
 def sources_digest() -> str:
     """SHA-256 over every Python source of the tracer (this package), by relative path."""
     tracer = Path(__file__).resolve().parent
@@ -401,18 +473,28 @@ class RenderFarm:
 
         self.wait_for_workers()
         self.check_environment()
+        refused = {}  # worker → the fingerprint of what it ran (None: its code did not say)
         client = self.client
-        [scene_future] = client.scatter([SceneData(bands)], broadcast=True, hash=False)
+        scene_data = SceneData(bands)
+        expected = fingerprint(environment(), scene_data.digest(), seed, backend)
+        [scene_future] = client.scatter([scene_data], broadcast=True, hash=False)
         setup_seconds = time.perf_counter() - start
 
         token = uuid.uuid4().hex[:12]
-        futures = {}
-        for unit in units:
+        futures, submissions = {}, itertools.count()
+
+        def submit(unit: Unit, attempt: int = 0, workers=None):
+            """Submit `unit`'s task (a re-run after a refused result only to `workers`)."""
             future = client.submit(render_task, scene_future, unit.band, unit.samples, unit.tile, seed, backend,
-                                   threads, key=f"spectral-unit-{token}-{unit.band}-{unit.pass_index}-"
-                                                f"{unit.tile_index}",
-                                   priority=-unit.pass_index, retries=RETRIES)
-            futures[future] = unit
+                                   threads, expected, key=f"spectral-unit-{token}-{unit.band}-{unit.pass_index}-"
+                                                      f"{unit.tile_index}-{next(submissions)}",
+                                   priority=-unit.pass_index, retries=RETRIES, workers=workers,
+                                   allow_other_workers=False)
+            futures[future] = (unit, attempt, workers)
+            return future
+
+        for unit in units:
+            submit(unit)
         completed = as_completed(list(futures), loop=client.loop)
         done, cancelled = 0, False
         work, work_done = sum(unit.pixel_samples for unit in units), 0
@@ -430,12 +512,18 @@ class RenderFarm:
                         if now - last_check >= WORKER_CHECK_SECONDS:
                             last_check = now
                             alone_since = self._check_alive(alone_since, now)
+                            connected = set(self.workers())
+                            for future, (unit, attempt, workers) in list(futures.items()):
+                                if workers is not None and not set(workers) & connected:
+                                    futures.pop(future).cancel()  # its workers left: to those now connected
+                                    completed.add(submit(unit, attempt, self._not_refused(refused)))
                         time.sleep(POLL_SECONDS)
                         continue
                     alone_since = None
+                    batch = [future for future in batch if future in futures]  # not those cancelled above
                     for future in batch:
                         if future.status == "error":
-                            raise _task_error(future, futures[future], self.address)
+                            raise _task_error(future, futures[future][0], self.address)
                         if future.status == "cancelled":  # not by us: the scheduler dropped it
                             raise self._dropped_error()
                     try:
@@ -445,12 +533,19 @@ class RenderFarm:
                     except Exception as problem:
                         raise SpectralError(f"collecting render results from {self.address} failed: "
                                             f"{type(problem).__name__}: {problem}") from problem
-                    for future, (sum_xyz, sum_sq) in zip(batch, results):
-                        unit = futures.pop(future)
-                        merger.add(unit, sum_xyz, sum_sq)
-                        work_done += unit.pixel_samples
+                    for future, result in zip(batch, results):
+                        unit, attempt, _ = futures.pop(future)
+                        worker = self._who_ran(future, result)
                         future.release()
-                    done += len(batch)
+                        if not (isinstance(result, TaskResult) and result.fingerprint == expected):
+                            refused[worker] = result.fingerprint if isinstance(result, TaskResult) else None
+                            if attempt + 1 >= REFUSALS:
+                                raise self._refused_error(refused)
+                            completed.add(submit(unit, attempt + 1, self._not_refused(refused)))
+                            continue
+                        merger.add(unit, result.sum_xyz, result.sum_sq)
+                        work_done += unit.pixel_samples
+                        done += 1
                     if progress is not None:
                         progress(film, work_done / work)
             finally:
@@ -473,8 +568,28 @@ class RenderFarm:
             "tasks_done": done,
             "tile_size": int(tile_size),
             "setup_seconds": setup_seconds,
+            "workers_refused": sorted(refused),
         }
         return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=stats)
+
+    def _who_ran(self, future, result) -> str:
+        """The worker that computed `future`'s result (by its own word, or where the scheduler holds it)."""
+        if isinstance(result, TaskResult):
+            return result.worker
+        try:
+            return next(iter(self.client.who_has([future]).get(future.key, ())), "an unknown worker")
+        except Exception:  # the worker has left with it
+            return "an unknown worker"
+
+    def _not_refused(self, refused: dict) -> list[str] | None:
+        """The connected workers none of whose results was refused (None when there are none: any worker)."""
+        return sorted(set(self.workers()) - set(refused)) or None
+
+    def _refused_error(self, refused: dict) -> SpectralError:
+        return SpectralError(f"Dask worker(s) {', '.join(sorted(refused))} of {self.address} run other code or hold "
+                             f"other scene data than this machine, so their pixels could differ, and a task was "
+                             f"refused {REFUSALS} times: no worker that agrees takes it; the render is incomplete "
+                             f"(docs/distributed.md)")
 
     def _check_alive(self, alone_since, now):
         """Raise when the scheduler has had no workers for `timeout` seconds during a render."""

@@ -17,6 +17,7 @@ import numpy as np
 
 from .checks import byte_size, shown
 from .errors import SpectralError
+from .files import GRID_LIMIT, regular_file
 from .scene import Grid
 
 _FLOAT_GRID_TYPES = ("FloatGrid", "DoubleGrid")
@@ -68,9 +69,7 @@ def load_grid(path, grid_name: str | None = None, index_to_world=None, *, nonneg
     (default: the file's stem). `.vdb`: `grid_name` selects the grid (default: the file's only grid);
     `index_to_world`, when given, replaces the VDB's own transform (it maps VDB index space to world).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise SpectralError(f"grid file {path} does not exist")
+    path = regular_file(path, "grid file", GRID_LIMIT)
     suffix = path.suffix.lower()
     if suffix == ".npy":
         if index_to_world is None:
@@ -185,17 +184,21 @@ def _check_memory(needed: int, what: str) -> None:
 def _read_vdb(path: Path, grid_name: str | None, index_to_world):
     vdb = openvdb_module()
     try:
-        headers = {grid.name: grid for grid in vdb.readAllGridMetadata(str(path))}
+        metadata = list(vdb.readAllGridMetadata(str(path)))
     except _VDB_READ_ERRORS as problem:
         raise SpectralError(f"grid file {path} cannot be read as OpenVDB: {problem}") from None
+    if grid_name is None and len({grid.name for grid in metadata}) == 1:
+        grid_name = metadata[0].name
     if grid_name is None:
-        if len(headers) != 1:
-            raise SpectralError(f"grid file {path} holds {_listing(headers)}: name the grid to use")
-        grid_name = next(iter(headers))
-    if grid_name not in headers:
-        raise SpectralError(f"grid file {path} has no grid {grid_name!r}; it holds {_listing(headers)}")
+        raise SpectralError(f"grid file {path} holds {_listing(metadata)}: name the grid to use")
+    named = [grid for grid in metadata if grid.name == grid_name]
+    if not named:
+        raise SpectralError(f"grid file {path} has no grid {grid_name!r}; it holds {_listing(metadata)}")
+    if len(named) > 1:
+        raise SpectralError(f"grid file {path} holds {len(named)} grids named {grid_name!r}, so the name does not "
+                            f"say which to read; it holds {_listing(metadata)}: give each grid its own name")
     where = f"grid {grid_name!r} in {path}"
-    header = headers[grid_name]
+    header = named[0]
     if type(header).__name__ not in _FLOAT_GRID_TYPES:
         raise SpectralError(f"{where} is a {type(header).__name__}, not a grid of floats")
     if header.gridClass == vdb.GridClass.LEVEL_SET:
@@ -258,7 +261,8 @@ def _first(mask: np.ndarray) -> tuple:
     return tuple(int(i) for i in np.argwhere(mask)[0])
 
 
-def _listing(headers: dict) -> str:
-    if not headers:
+def _listing(grids: list) -> str:
+    """A VDB's grids (their metadata) in words."""
+    if not grids:
         return "no grids"
-    return "grids " + ", ".join(f"{name!r} ({type(grid).__name__})" for name, grid in headers.items())
+    return "grids " + ", ".join(f"{grid.name!r} ({type(grid).__name__})" for grid in grids)

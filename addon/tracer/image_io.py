@@ -8,16 +8,20 @@ Image's and the command lines' are named alike and Blender opens every one as th
 All files of one command are written together (`write_all`): each to a temporary name beside its
 destination, and only when every one was written are they renamed into place. A failed or cancelled
 write never leaves a half-written file or clobbers an existing one, and never replaces some files but
-not others. `check_destination` tells before a long render whether a file can be written at all.
+not others. `check_destination` tells before a long render whether a file can be written at all, and
+`check_distinct` that no two outputs name the same file (the second would replace the first).
 """
 
+import errno
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from typing import Callable, NamedTuple
 
 import numpy as np
 
+from .checks import byte_size
 from .errors import SpectralError
 
 
@@ -46,6 +50,15 @@ def _open_image_io():
     return OpenImageIO
 
 
+def why(problem: OSError) -> str:
+    """An OSError in words, a full disk said plainly."""
+    if problem.errno == errno.ENOSPC:
+        return "the disk is full (no space left on the device)"
+    if problem.errno == errno.EDQUOT:
+        return "the disk quota is exceeded (no space left for this user)"
+    return problem.strerror or str(problem)
+
+
 def _existing_ancestor(folder: Path) -> Path:
     while not folder.exists() and folder != folder.parent:
         folder = folder.parent
@@ -68,8 +81,34 @@ def check_destination(path, suffix: str | None = None) -> Path:
         os.close(handle)
         os.unlink(probe)
     except OSError as problem:
-        raise SpectralError(f"cannot write {path}: {problem.strerror or problem}") from None
+        raise SpectralError(f"cannot write {path}: {why(problem)}") from None
     return path
+
+
+def _same_file(first: Path, second: Path) -> bool:
+    """Whether two paths name one file: equal once `..` and symbolic links are resolved, or (both existing)
+    one file by two names (hard links, a case-insensitive file system)."""
+    if first.resolve() == second.resolve():
+        return True
+    try:
+        return os.path.samefile(first, second)
+    except OSError:  # one does not exist (yet): only equal resolved paths name the same file
+        return False
+
+
+def check_distinct(named_paths) -> None:
+    """A SpectralError naming both when two of the (name, path) pairs (None paths skipped) name the same file:
+    the second write would replace the first."""
+    seen = []
+    for name, path in named_paths:
+        if path is None:
+            continue
+        for other_name, other_path in seen:
+            if _same_file(Path(other_path), Path(path)):
+                both = f"{other_path}" if str(other_path) == str(path) else f"{other_path} and {path}"
+                raise SpectralError(f"{other_name} and {name} name the same file ({both}): each output needs a "
+                                    "file of its own, or one would replace the other")
+        seen.append((name, path))
 
 
 def _make_folders(folder: Path) -> list[Path]:
@@ -86,6 +125,7 @@ def _make_folders(folder: Path) -> list[Path]:
 def write_all(outputs: list[Output]) -> list[Path]:
     """Write every output or none (see the module docstring); folders are created as needed and removed
     again when the writing fails. Returns the paths written."""
+    check_distinct((f"the output {output.path}", output.path) for output in outputs)
     for output in outputs:
         check_destination(output.path)
     staged, created, done = [], [], False
@@ -99,7 +139,7 @@ def write_all(outputs: list[Output]) -> list[Path]:
                 staged.append(temporary)
                 output.write(temporary)
             except OSError as problem:
-                raise SpectralError(f"cannot write {path}: {problem.strerror or problem}") from None
+                raise SpectralError(f"cannot write {path}: {why(problem)}") from None
             except SpectralError as problem:
                 raise SpectralError(f"cannot write {path}: {problem}") from None
         mode = _new_file_mode()
@@ -108,7 +148,7 @@ def write_all(outputs: list[Output]) -> list[Path]:
                 os.chmod(temporary, mode)  # mkstemp makes files private (0600): give the mode a new file gets
                 os.replace(temporary, output.path)
             except OSError as problem:  # rare after a successful write in the same folder
-                raise SpectralError(f"cannot write {output.path}: {problem.strerror or problem}") from None
+                raise SpectralError(f"cannot write {output.path}: {why(problem)}") from None
         done = True
     finally:
         for temporary in staged:
@@ -136,12 +176,26 @@ def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pix
     if filename.endswith(".exr"):
         spec.attribute("compression", "zip")
     output = oiio.ImageOutput.create(filename)
-    if output is None or not output.open(filename, spec):
+    if output is None:
         raise SpectralError(f"OpenImageIO cannot write it: {oiio.geterror() or 'it gave no reason'}")
-    ok = output.write_image(np.ascontiguousarray(pixels))
-    output.close()
+    ok = output.open(filename, spec) and output.write_image(np.ascontiguousarray(pixels))
+    reason = output.geterror() or oiio.geterror()  # the file's own error first: the global one is often empty
+    ok = output.close() and ok
     if not ok:
-        raise SpectralError(f"OpenImageIO cannot write it: {oiio.geterror() or 'it gave no reason'}")
+        full = _disk_space_short(filename, pixels.nbytes)
+        raise SpectralError(f"OpenImageIO cannot write it: {'; '.join(filter(None, (full, reason))) or 'it gave no reason'}")
+
+
+def _disk_space_short(filename: str, size: int) -> str:
+    """"the disk is full ..." when the disk holding `filename` has less free space than `size` bytes (the
+    uncompressed image: OpenImageIO does not say why a write failed), else ""."""
+    try:
+        free = shutil.disk_usage(Path(filename).absolute().parent).free
+    except OSError:
+        return ""
+    if free >= size:
+        return ""
+    return f"the disk is full ({byte_size(free)} free, the image takes up to {byte_size(size)})"
 
 
 def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None, alpha: np.ndarray | None = None,
@@ -154,8 +208,22 @@ def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = No
     if variance is not None:
         layers.append(variance)
         names += channel_names(VARIANCE, layer)
-    pixels = np.concatenate(layers, axis=2).astype(np.float32)
+    pixels = finite(np.concatenate(layers, axis=2), path)
     return Output(check_destination(path, ".exr"), lambda name: _write_oiio(name, pixels, names, "float"))
+
+
+def finite(pixels: np.ndarray, path) -> np.ndarray:
+    """`pixels` as float32, or a SpectralError when any is not finite there (NaN, or beyond float32's 3.4e38,
+    as the squares of very bright samples are): no file ever holds one."""
+    with np.errstate(over="ignore"):
+        pixels = np.asarray(pixels).astype(np.float32)
+    bad = ~np.isfinite(pixels)
+    if bad.any():
+        row, column = (int(i) for i in np.argwhere(bad)[0][:2])
+        raise SpectralError(f"cannot write {path}: {int(bad.sum())} of its values are NaN or beyond float32's range "
+                            f"(3.4e38), the first at row {row}, column {column}; lower the brightest lights or "
+                            "emission")
+    return pixels
 
 
 def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None,
@@ -173,7 +241,7 @@ def srgb_display(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
 
 def png(path, rgb: np.ndarray, exposure: float = 0.0) -> Output:
     """PNG preview of linear Rec.709 through the Standard (sRGB) view transform."""
-    pixels = srgb_display(rgb, exposure)
+    pixels = srgb_display(finite(rgb, path), exposure)
     return Output(check_destination(path, ".png"), lambda name: _write_oiio(name, pixels, ["R", "G", "B"], "uint8"))
 
 
@@ -184,7 +252,7 @@ def write_png(path, rgb: np.ndarray, exposure: float = 0.0) -> Path:
 
 def npy(path, xyz: np.ndarray) -> Output:
     """XYZ as a float32 array of shape (height, width, 3)."""
-    pixels = xyz.astype(np.float32)
+    pixels = finite(xyz, path)
     return Output(check_destination(path, ".npy"), lambda name: np.save(name, pixels))
 
 

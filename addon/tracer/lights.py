@@ -40,6 +40,18 @@ def kernel_spectrum(light: Light, spectrum: Spectrum | None = None, cmf: str = "
     return values / np.pi if light.kind == "area" else values
 
 
+def peak_emission(light: Light, cmf: str) -> float:
+    """The most the light emits per nm, in its kind's radiant unit (`scene.RADIANT_UNITS`): the peak of its
+    kernel spectrum (of both of a sky's), or of an envmap's brightest texel (inf when that overflows)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        if light.kind == "envmap":
+            basis = np.asarray(light.basis_values(), dtype=np.float64)
+            texels = np.asarray(light.image, dtype=np.float64).reshape(-1, 3)
+            return float(light.strength * (texels.max(axis=0) @ basis).max())
+        spectra_ = [light.spectrum] + ([light.horizon_spectrum] if light.horizon_spectrum is not None else [])
+        return float(max(kernel_spectrum(light, spectrum, cmf).max() for spectrum in spectra_))
+
+
 def proxy_luminance(spd: np.ndarray, cmf: str) -> float:
     """The light-choice proxy of a radiometric spectrum: its luminance Y, or, where more, that of an
     equal-energy spectrum of the same radiant integral (so a light with no visible part, a UV lamp
@@ -76,7 +88,8 @@ def selection_powers(lights: tuple[Light, ...], spds: np.ndarray, media: tuple[M
         elif light.kind in ("environment", "sky", "envmap"):
             power[index] = np.pi * luminance
         else:
-            distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
+            with np.errstate(over="ignore"):  # a distance beyond float64 is inf: the light then weighs 0
+                distance = max(np.linalg.norm(light.position - centre), radius, 1e-3)
             solid_angle = np.pi if light.kind == "area" else 4.0 * np.pi
             power[index] = solid_angle * luminance / distance**2
     return power

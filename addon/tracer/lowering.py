@@ -9,6 +9,7 @@ the same `KernelScene`, so they cannot disagree about the scene.
 import numpy as np
 
 from . import bvh, colorimetry, envmaps, sampling
+from .checks import unit
 from .errors import SpectralError
 from .glow import normalisation_table
 from .kernels.layout import (
@@ -182,7 +183,7 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
     }
     for index, light in enumerate(lights):
         if light.kind == "sun":
-            out["dir"][index] = light.direction / np.linalg.norm(light.direction)
+            out["dir"][index] = unit(light.direction)
             out["cos"][index] = np.cos(0.5 * light.angle)
         elif light.kind == "sky":
             horizon = light.horizon_spectrum or light.spectrum
@@ -190,21 +191,28 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
         elif light.kind in ("point", "spot", "area"):
             out["pos"][index] = light.position
             if light.kind == "spot":
-                axis = np.asarray(light.spot_direction, dtype=np.float64)
-                out["dir"][index] = axis / np.linalg.norm(axis)
+                out["dir"][index] = unit(light.spot_direction)
                 cos_half = np.cos(0.5 * light.spot_size)
                 out["cos"][index] = cos_half
                 out["smooth"][index] = (1.0 - cos_half) * light.spot_blend
             if light.kind == "area":
-                axes = np.asarray(light.area_axes, dtype=np.float64)
-                axes = axes / np.linalg.norm(axes, axis=0)
+                axes = unit(light.area_axes, axis=0)
                 out["dir"][index] = -axes[:, 2]
                 out["area_span"][index] = 0.5 * np.array([light.size_x * axes[:, 0], light.size_y * axes[:, 1]])
                 out["area_shape"][index] = AREA_SHAPES.index(light.area_shape)
     power = selection_powers(lights, out["spd"], media, cmf)
-    out["pmf"] = power / power.sum() if count else power
+    out["pmf"] = _selection_pmf(power)
     out["power"] = power
     return KernelLights(**out)
+
+
+def _selection_pmf(power: np.ndarray) -> np.ndarray:
+    """The probabilities of choosing each light, in proportion to `power`: scaled into [0, 1] first, so the sum
+    cannot overflow; lights that all weigh nothing (far beyond the media) are chosen alike."""
+    if power.size == 0:
+        return power
+    scaled = power / power.max() if power.max() > 0 else np.ones(power.size)
+    return scaled / scaled.sum()
 
 
 def _triangles(surfaces: tuple[Surface, ...]):
@@ -291,7 +299,7 @@ def _with_surface_lights(lights: KernelLights, surfaces: tuple[Surface, ...], em
         area_shape=np.concatenate([lights.area_shape, np.zeros(extra, np.int64)]),
         cos=np.concatenate([lights.cos, np.ones(extra)]),
         smooth=np.concatenate([lights.smooth, np.zeros(extra)]),
-        pmf=power / power.sum() if power.sum() > 0 else power,
+        pmf=_selection_pmf(power),
         power=power)
 
 
@@ -357,6 +365,7 @@ def compile_scene(scene: Scene) -> KernelScene:
             per_path=int(settings.wavelengths_per_path),
             xyz_weights=colorimetry.xyz_weights(settings.cmf),
         ),
-        termination=KernelTermination(max_depth=int(settings.max_depth), rr_depth=int(settings.rr_depth)),
+        # int64 whatever the value (check_settings bounds it), so that no value changes the kernel's argument types
+        termination=KernelTermination(max_depth=np.int64(settings.max_depth), rr_depth=np.int64(settings.rr_depth)),
     )
     return with_band(kernel_scene, settings.wavelength_sampling, *default_band(settings))

@@ -58,10 +58,12 @@ def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], 
 
 def _tile_arguments(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
                     seed: int) -> tuple:
-    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last two)."""
-    x0, y0, width, height = tile
-    return (kernel_scene, x0, y0, width, height, samples[0], samples[1], seed, band, np.zeros((height, width, 3)),
-            np.zeros((height, width, 3)))
+    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last two). Integers go as
+    int64 (the seed as uint64, its whole range) whatever their values, so that no value changes the
+    compiled kernel's argument types (a seed of 2⁶³ would be typed uint64, and compile a second kernel)."""
+    x0, y0, width, height = (np.int64(value) for value in tile)
+    return (kernel_scene, x0, y0, width, height, np.int64(samples[0]), np.int64(samples[1]), np.uint64(seed),
+            np.int64(band), np.zeros((int(height), int(width), 3)), np.zeros((int(height), int(width), 3)))
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:

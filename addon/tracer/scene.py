@@ -40,10 +40,17 @@ ENVMAP_ORTHONORMAL_TO = 1e-5
 WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "colour")
 BACKENDS = ("numba", "numpy")
 SEED_MAX = 2**64 - 1  # seeds are unsigned 64-bit integers in the kernels' random streams
+SPP_MAX = 2**32  # a pixel's samples are points of a Sobol sequence of 2³² points (kernels/rng.py)
+# Scattering events of a path: Russian roulette ends paths long before; beyond, a value is a mistake.
+DEPTH_MAX = 2**20
 # Delta and ratio tracking take about one step per unit of optical depth (through the majorant) along a
 # ray, so a medium far thicker than this renders for hours and cannot be interrupted mid-ray. It is also
 # far beyond anything visible: light through optical depth 30 is dimmed by e⁻³⁰ ≈ 1e-13.
 MAX_OPTICAL_DEPTH = 1e5
+# The most a light may emit per nm (its spectrum × strength in the unit of RADIANT_UNITS per nm, at its peak; an
+# envmap's brightest texel): a pixel's samples of brighter light, and their squares (the variance), overflow
+# the float32 of the image files (3.4e38). The Sun at noon gives about 1.9 W·m⁻²·nm⁻¹.
+MAX_LIGHT_PEAK = 1e15
 
 
 @dataclass(frozen=True, eq=False)
@@ -465,6 +472,18 @@ def _check_light(light: Light, where: str, cmf: str) -> None:
         checks.one_of(light.area_shape, f"{where}.area_shape", AREA_SHAPES)
         for key in ("size_x", "size_y"):
             checks.positive(checks.number(getattr(light, key), f"{where}.{key}"), f"{where}.{key}")
+    _check_light_peak(light, where, cmf)
+
+
+def _check_light_peak(light: Light, where: str, cmf: str) -> None:
+    from .lights import peak_emission  # lights reads this module's Light
+
+    peak = peak_emission(light, cmf)
+    if not peak <= MAX_LIGHT_PEAK:
+        raise SpectralError(f"{where}.strength: the light's spectrum × strength peaks at {peak:.3g} "
+                            f"{RADIANT_UNITS[light.kind]} per nm, more than the {MAX_LIGHT_PEAK:g} the tracer "
+                            "accepts (its samples' squares, the variance, would overflow the float32 of the image "
+                            "files): lower the strength")
 
 
 def _check_envmap(light: Light, where: str) -> None:
@@ -514,13 +533,10 @@ def _check_finite_nonnegative(values: np.ndarray, where: str, index: str) -> Non
 def _check_area_axes(axes, where: str) -> None:
     """Three mutually orthogonal columns (to AREA_AXES_ORTHOGONAL_TO) of finite, non-zero length."""
     columns = checks.matrix3(axes, where).T
-    with np.errstate(over="ignore"):  # a length beyond float64 is inf, refused below
-        lengths = np.linalg.norm(columns, axis=1)
-    for index, length in enumerate(lengths):
-        if not 0 < length < np.inf:
-            raise SpectralError(f"{where}: its column {index} (local {'XYZ'[index]}) must have a finite, non-zero "
-                                f"length, found {length:g}")
-    unit = columns / lengths[:, None]
+    for index, column in enumerate(columns):
+        if not np.abs(column).max() > 0:
+            raise SpectralError(f"{where}: its column {index} (local {'XYZ'[index]}) must have a non-zero length")
+    unit = checks.unit(columns)
     for first, second in ((0, 1), (0, 2), (1, 2)):
         cosine = float(unit[first] @ unit[second])
         if abs(cosine) > AREA_AXES_ORTHOGONAL_TO:
@@ -539,10 +555,10 @@ def _check_light_spectrum(spectrum: Spectrum, where: str, unit: str, cmf: str) -
 
 def check_settings(settings: RenderSettings, where: str = "render") -> None:
     """The render settings' part of `Scene.validate` (also for settings overridden after loading)."""
-    checks.whole_within(settings.spp, f"{where}.spp", 1)
+    checks.whole_within(settings.spp, f"{where}.spp", 1, SPP_MAX)
     checks.whole_within(settings.seed, f"{where}.seed", 0, SEED_MAX)
-    checks.whole_within(settings.max_depth, f"{where}.max_depth", 1)
-    checks.whole_within(settings.rr_depth, f"{where}.rr_depth", 0)
+    checks.whole_within(settings.max_depth, f"{where}.max_depth", 1, DEPTH_MAX)
+    checks.whole_within(settings.rr_depth, f"{where}.rr_depth", 0, DEPTH_MAX)
     checks.one_of(settings.wavelength_sampling, f"{where}.wavelength_sampling", WAVELENGTH_SAMPLINGS)
     per_path = checks.whole(settings.wavelengths_per_path, f"{where}.wavelengths_per_path")
     if per_path not in WAVELENGTHS_PER_PATH:
@@ -554,7 +570,14 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
     if lambda_min >= lambda_max:
         raise SpectralError(f"{where}: the wavelength range {lambda_min:g}–{lambda_max:g} nm is empty "
                             "(lambda_min must be below lambda_max)")
-    checks.whole_within(settings.bands, f"{where}.bands", 1)
+    if checks.whole_within(settings.bands, f"{where}.bands", 1) > 1:
+        from .sampling import band_ranges  # the rule of bands, where they are made
+        from .wavelength_modes import default_band
+
+        try:
+            band_ranges(*default_band(settings), settings.bands)
+        except SpectralError as problem:
+            raise SpectralError(f"{where}.bands: {problem}") from None
     checks.one_of(settings.cmf, f"{where}.cmf", CMFS)
     checks.one_of(settings.backend, f"{where}.backend", BACKENDS)
     checks.within(checks.number(settings.noise_threshold, f"{where}.noise_threshold"), f"{where}.noise_threshold",

@@ -14,6 +14,7 @@ import numpy as np
 from . import checks, spectra
 from .checks import shown
 from .errors import SpectralError
+from .files import IMAGE_LIMIT, SCENE_LIMIT, regular_file
 from .film import check_film_memory, film_bytes
 from .grids import affine_matrix, load_grid, save_grid_npy
 from .scene import (LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
@@ -88,9 +89,7 @@ def _scene_path(path) -> Path:
 
 def _read_json(path: Path):
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SpectralError(f"scene file {path} does not exist") from None
+        text = regular_file(path, "scene file", SCENE_LIMIT).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as problem:
         raise SpectralError(f"scene file {path} cannot be read: {problem}") from None
     try:
@@ -240,14 +239,14 @@ def _light(value, where: str, folder: Path) -> Light:
     data = _fields(value, where, schema, what=f" for {kind} lights")
     fields = {}
     if kind == "sun":
-        fields["direction"] = _unit(data["direction"], f"{where}.direction")
+        fields["direction"] = checks.unit_vector(data["direction"], f"{where}.direction")
         fields["angle"] = float(np.radians(checks.number(data.get("angle", 0.0), f"{where}.angle")))
     if kind == "sky" and "horizon_spectrum" in data:
         fields["horizon_spectrum"] = _spectrum(data["horizon_spectrum"], f"{where}.horizon_spectrum", folder)
     if kind in ("point", "spot", "area"):
         fields["position"] = checks.vector(data["position"], f"{where}.position")
     if kind == "spot":
-        fields["spot_direction"] = _unit(data["spot_direction"], f"{where}.spot_direction")
+        fields["spot_direction"] = checks.unit_vector(data["spot_direction"], f"{where}.spot_direction")
         size = data.get("spot_size", np.degrees(Light.spot_size))
         fields["spot_size"] = float(np.radians(checks.number(size, f"{where}.spot_size")))
         fields["spot_blend"] = checks.number(data.get("spot_blend", Light.spot_blend), f"{where}.spot_blend")
@@ -351,11 +350,11 @@ def _image(value, where: str, folder: Path) -> np.ndarray:
     vertices or triangles (`Scene.validate` checks their values)."""
     if not isinstance(value, str):
         raise SpectralError(f"{where}: expected the name of a .npy file, found {shown(value)}")
-    path = folder / value
     try:
+        path = regular_file(folder / value, "image file", IMAGE_LIMIT)
         return np.load(path, allow_pickle=False)
-    except FileNotFoundError:
-        raise SpectralError(f"{where}: the file {path} does not exist") from None
+    except SpectralError as problem:
+        raise SpectralError(f"{where}: {problem}") from None
     except (OSError, ValueError) as problem:
         raise SpectralError(f"{where}: the file {path} is not a .npy array: {problem}") from None
 
@@ -390,11 +389,6 @@ def _list(value, where: str) -> list:
     if not isinstance(value, list):
         raise SpectralError(f"{where}: expected a list, found {shown(value)}")
     return value
-
-
-def _unit(value, where: str) -> np.ndarray:
-    vector = checks.direction(value, where)
-    return vector / np.linalg.norm(vector)
 
 
 def _spectrum(value, where: str, folder: Path) -> Spectrum:

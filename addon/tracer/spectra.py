@@ -20,7 +20,9 @@ import scipy.constants
 
 from . import colorimetry
 from .planck import planck_radiance
+from .checks import shown
 from .errors import SpectralError
+from .files import SPECTRUM_LIMIT, regular_file
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
 ILLUMINANT_NAMES = (
@@ -58,6 +60,10 @@ _NM = 1e-9  # metres
 _WIEN_B = scipy.constants.Wien  # m·K
 
 
+class NonFiniteSpectrum(SpectralError):
+    """A spectrum's values would not all be finite (`from_spec` names the description that made them)."""
+
+
 @dataclass(frozen=True, eq=False)
 class Spectrum:
     """A spectral function sampled on GRID (one value per nanometre, 250–830 nm)."""
@@ -69,7 +75,7 @@ class Spectrum:
         if values.shape != GRID.shape:
             raise SpectralError(f"a spectrum needs {GRID.size} values on the 1 nm grid, got shape {values.shape}")
         if not np.all(np.isfinite(values)):
-            raise SpectralError("a spectrum contains NaN or infinite values")
+            raise NonFiniteSpectrum("a spectrum contains NaN or infinite values")
         values = values.copy()
         values.flags.writeable = False
         object.__setattr__(self, "values", values)
@@ -105,21 +111,21 @@ def _float_array(numbers, what: str, name: str) -> np.ndarray:
 
 
 def table(wavelengths, values, name: str = "table") -> Spectrum:
-    """Piecewise-linear spectrum through (λ, value) pairs; 0 outside the tabulated range."""
+    """Piecewise-linear spectrum through (λ, value) pairs, at least two; 0 outside the tabulated range."""
     wavelengths = _float_array(wavelengths, "wavelengths", name)
     values = _float_array(values, "values", name)
     if wavelengths.ndim != 1 or wavelengths.shape != values.shape:
         raise SpectralError(f"{name}: the spectrum's wavelengths and values must be two lists of equal length")
-    if wavelengths.size == 0:
-        raise SpectralError(f"{name}: the spectrum is empty")
+    if wavelengths.size < 2:
+        raise SpectralError(f"{name}: a table needs at least 2 rows (wavelength, value), found {wavelengths.size}: "
+                            "it is 0 outside the range its rows span; for one value at every wavelength give a "
+                            "constant")
     if not (np.all(np.isfinite(wavelengths)) and np.all(np.isfinite(values))):
         raise SpectralError(f"{name}: the spectrum contains NaN or infinite numbers")
     if np.any(np.diff(wavelengths) <= 0):
         raise SpectralError(f"{name}: the spectrum's wavelengths must increase strictly")
     if wavelengths[-1] < LAMBDA_MIN or wavelengths[0] > LAMBDA_MAX:
         raise SpectralError(f"{name}: the spectrum lies outside {LAMBDA_MIN:g}–{LAMBDA_MAX:g} nm (are the units nm?)")
-    if wavelengths.size == 1:
-        return constant(values[0])
     return Spectrum(np.interp(GRID, wavelengths, values, left=0.0, right=0.0))
 
 
@@ -167,7 +173,7 @@ def _read_csv_rows(path: Path) -> list[tuple[int, float, float]]:
     """(line number, λ, value) of each data row; blank lines and `#` comments are skipped, and the first
     row may be a header (any non-numeric field)."""
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        text = regular_file(path, "spectrum file", SPECTRUM_LIMIT).read_text(encoding="utf-8-sig")
     except OSError as error:
         raise SpectralError(f"cannot read spectrum file {str(path)!r}: {error.strerror}") from None
     except UnicodeDecodeError:
@@ -419,8 +425,13 @@ def _from_spec(spec, name: str, base_dir, depth: int) -> Spectrum:
     if _is_number(spec):
         return constant(_finite(spec, f"{name}: the number"))
     if not isinstance(spec, dict) or "type" not in spec:
-        raise SpectralError(f"{name}: a spectrum is a number or an object with a \"type\", got {spec!r}")
-    return _build(spec, name, base_dir, depth)
+        raise SpectralError(f"{name}: a spectrum is a number or an object with a \"type\", got {shown(spec)}")
+    with np.errstate(all="ignore"):  # an overflow is reported below, naming the description
+        try:
+            return _build(spec, name, base_dir, depth)
+        except NonFiniteSpectrum:
+            raise SpectralError(f"{name}: the spectrum {shown(spec)} has values beyond float64's range (1.8e308) "
+                                "or undefined (NaN) at some wavelengths: its numbers are too extreme") from None
 
 
 def to_spec(spectrum: Spectrum) -> dict:

@@ -150,3 +150,17 @@ def test_a_later_frame_that_fails_is_named_and_the_earlier_frames_kept(registere
     assert done.returncode == 1, done.stderr
     assert "error: frame 2: render settings: the wavelength range 830–830 nm is empty" in done.stderr
     assert "wrote" in done.stdout and sorted(path.name for path in (tmp_path / "out").iterdir()) == ["f_1.exr"]
+
+
+def test_an_exr_and_a_png_naming_one_file_are_refused_before_opening(tmp_path, monkeypatch, capsys):
+    """Issue 30: `--png` a link to `--out` would replace the EXR just written."""
+    from addon import cli
+
+    out = tmp_path / "out_0001.exr"
+    out.write_bytes(b"previous render")
+    (tmp_path / "out_0001.png").symlink_to(out)
+    monkeypatch.setattr(cli, "open_scene", lambda *args: pytest.fail("the file was opened: too late"))
+    assert cli.main([str(tmp_path / "x.blend"), "--out", str(tmp_path / "out_####.exr"), "--png",
+                     str(tmp_path / "out_####.png"), "--frame", "1", "--quiet"]) == 1
+    assert "--out and --png name the same file" in capsys.readouterr().err
+    assert out.read_bytes() == b"previous render"

@@ -137,7 +137,7 @@ def test_missing_csv_is_named(registered, tmp_path):
     spectrum = bpy.data.lights.new("Lamp", "SPOT").spectral.spectrum
     spectrum.source = "CSV"
     spectrum.filepath = str(tmp_path / "missing.csv")
-    with pytest.raises(SpectralError, match=r"Light 'Lamp' spectrum: cannot read spectrum file .*missing.csv"):
+    with pytest.raises(SpectralError, match=r"Light 'Lamp' spectrum: spectrum file .*missing.csv does not exist"):
         to_spectrum(spectrum)
     assert tuple(spectrum.preview) == (0.0, 0.0, 0.0)
 

@@ -105,10 +105,14 @@ BAD_OPTIONS = {
     "negative seed": (["--seed", -1], "--seed: must be at least 0"),
     "no samples": (["--spp", 0], "--spp: must be at least 1, found 0"),
     "no threads": (["--threads", 0], "--threads: must be at least 1"),
-    "timeout nan": (["--workers", 1, "--timeout", "nan"], "--timeout: must be a positive number of seconds, found nan"),
+    "timeout nan": (["--workers", 1, "--timeout", "nan"], "--timeout: must be a positive number of seconds, at most 86400 (a day), found nan"),
     "negative timeout": (["--workers", 1, "--timeout", -5],
-                         "--timeout: must be a positive number of seconds, found -5"),
+                         "--timeout: must be a positive number of seconds, at most 86400 (a day), found -5"),
     "no workers": (["--workers", 0], "--workers: must be at least 1, found 0"),
+    "spp beyond the Sobol points": (["--spp", 2**32 + 1], "--spp: must be at most 4294967296, found 4294967297"),
+    "spp of 2⁶⁴": (["--spp", 2**64], "--spp: must be at most 4294967296"),
+    "a million workers": (["--workers", 10**6], "--workers: must be at most"),
+    "timeout of a year": (["--workers", 1, "--timeout", 3.2e7], "at most 86400 (a day), found 3.2e+07"),
     "png as the exr": (["--out", "{tmp}/o.png"], "o.png: the file is written as EXR, so its name must end in .exr"),
     "exr as the png": (["--png", "{tmp}/o.exr"], "o.exr: the file is written as PNG, so its name must end in .png"),
     "out is a folder": (["--out", "{tmp}/folder.exr"], "folder.exr: it is a folder"),
@@ -154,3 +158,39 @@ def test_an_unexpected_exception_is_an_internal_error_with_its_own_exit_code(wri
     assert "Traceback" in stderr and "internal error: ZeroDivisionError: a bug" in stderr
     assert "This is a bug" in stderr and "report it" in stderr
     assert not (tmp_path / "x.exr").exists()
+
+
+def _same_file_cases(folder: Path) -> dict:
+    """Ways for two output options to name one file (issue 30): literally, via `..`, a symbolic link and a hard
+    link; each case is (the options, the file they share)."""
+    (folder / "sub").mkdir()
+    shared = folder / "o.exr"
+    shared.write_bytes(b"previous render")
+    (folder / "link.png").symlink_to(shared)
+    (folder / "hard.npy").hardlink_to(shared)
+    return {
+        "stats on the image": (["--out", shared, "--stats", shared], shared),
+        "dot-dot": (["--out", shared, "--stats", folder / "sub" / ".." / "o.exr"], shared),
+        "symbolic link": (["--out", shared, "--png", folder / "link.png"], shared),
+        "hard link": (["--out", shared, "--npy", folder / "hard.npy"], shared),
+    }
+
+
+@pytest.mark.parametrize("case", ["stats on the image", "dot-dot", "symbolic link", "hard link"])
+def test_two_outputs_naming_one_file_are_refused_before_rendering(write_scene, tmp_path, case, monkeypatch, capsys):
+    from addon.tracer import cli, scene_io
+
+    options, shared = _same_file_cases(tmp_path)[case]
+    monkeypatch.setattr(scene_io, "load_scene", lambda path: pytest.fail("the scene was loaded: too late"))
+    assert cli.main(["render", str(write_scene()), *map(str, options)]) == cli.EXIT_BAD_INPUT
+    message = capsys.readouterr().err
+    assert options[0] in message and options[2] in message and "same file" in message
+    assert shared.read_bytes() == b"previous render"
+
+
+def test_write_all_refuses_two_outputs_of_one_file(tmp_path):
+    target = tmp_path / "a.npy"
+    with pytest.raises(image_io.SpectralError, match="same file"):
+        image_io.write_all([image_io.npy(target, np.zeros((1, 1, 3))), image_io.npy(tmp_path / "." / "a.npy",
+                                                                                  np.ones((1, 1, 3)))])
+    assert not target.exists()

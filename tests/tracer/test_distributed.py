@@ -211,18 +211,22 @@ class LoopbackCluster:
                 time.sleep(0.2)
         raise RuntimeError("dask scheduler did not start")
 
-    def start_workers(self, count: int, importable: bool = True) -> None:
+    def start_workers(self, count: int, importable: bool = True, preload: Path | None = None) -> None:
+        """Start `count` workers and wait for them; `preload`: a script each runs first (`dask worker --preload`)."""
         env = self.env if importable else {key: value for key, value in self.env.items() if key != "PYTHONPATH"}
+        extra = [] if preload is None else ["--preload", str(preload)]
         for index in range(count):
             log = self._log(f"worker{len(self.workers)}.log")
             self.workers.append(subprocess.Popen(
                 _dask("dask_worker", self.address, "--host", "127.0.0.1", "--nthreads", "1", "--no-nanny",
-                      "--no-dashboard", "--death-timeout", "60", "--name", f"test-worker-{len(self.workers)}"),
+                      "--no-dashboard", "--death-timeout", "60", "--name", f"test-worker-{len(self.workers)}",
+                      *extra),
                 env=env, cwd=self.folder, stdout=subprocess.DEVNULL, stderr=log))
         from distributed import Client
 
         with Client(self.address, timeout=START_TIMEOUT, set_as_default=False) as client:
-            client.wait_for_workers(len(self.workers), timeout=START_TIMEOUT)
+            client.wait_for_workers(len([worker for worker in self.workers if worker.poll() is None]),
+                                    timeout=START_TIMEOUT)
 
     def stop(self) -> None:
         for process in self.workers:
@@ -322,6 +326,73 @@ def test_a_worker_killed_mid_render_changes_nothing(reference, fresh_loopback):
     assert victim.wait(timeout=10) == -signal.SIGKILL
     assert result.stats["workers"] == 1
     assert_same_film(expected, result.film)
+
+
+OTHER_CODE = """
+# A worker running other tracer code (issue 30): its sources' digest differs from the client's.
+import addon.tracer.distributed as distributed
+
+distributed.sources_digest = lambda: "the sources of another version"
+"""
+SLOW = """
+# A worker with this code that takes 30 ms more per task, so that the render outlasts another worker's start.
+import time
+
+import addon.tracer.distributed as distributed
+
+if not hasattr(distributed.single, "unslowed_render_unit"):  # Dask may import a preload twice
+    distributed.single.unslowed_render_unit = distributed.single.render_unit
+    distributed.single.render_unit = lambda *args: time.sleep(0.03) or distributed.single.unslowed_render_unit(*args)
+"""
+
+
+@pytest.mark.slow
+def test_a_worker_with_other_code_joining_mid_render_changes_nothing(fresh_loopback, tmp_path):
+    """On main such a worker was sent tasks unchecked and the image came back wrong, with exit 0."""
+    scene = small_scene(spp=256, bands=1)
+    expected = single.render(scene).film
+    (tmp_path / "slow.py").write_text(SLOW)
+    fresh_loopback.start_workers(1, preload=tmp_path / "slow.py")
+    preload = tmp_path / "other_code.py"
+    preload.write_text(OTHER_CODE)
+    joined = []
+
+    def progress(_film, fraction):
+        if not joined:
+            fresh_loopback.start_workers(1, preload=preload)
+            joined.append(fraction)
+
+    result = distributed.render(scene, scheduler=fresh_loopback.address, tile_size=3, progress=progress)
+    assert joined and joined[0] < 0.5
+    assert result.stats["workers"] == 2
+    assert len(result.stats["workers_refused"]) == 1, "the other worker ran no task: the test proved nothing"
+    assert_same_film(expected, result.film)
+
+
+@pytest.mark.slow
+def test_a_farm_whose_every_worker_disagrees_is_a_clear_error_not_a_hang(loopback, monkeypatch):
+    """Here the client expects another fingerprint than every worker computes: each result is refused, and the
+    render stops once a task has been refused REFUSALS times."""
+    monkeypatch.setattr(distributed, "fingerprint", lambda *parts: "not what any worker runs")
+    with pytest.raises(SpectralError, match=f"run other code .* refused {distributed.REFUSALS} times"):
+        distributed.render(small_scene(spp=4, bands=1), scheduler=loopback.address, tile_size=6, timeout=20)
+
+
+def test_a_result_is_refused_unless_its_fingerprint_is_the_tasks(reference, monkeypatch):
+    """The worker's side: a task whose fingerprint is not this process's returns no pixels."""
+    scene, _ = reference
+    data = distributed.SceneData(single.band_scenes(scene))
+    mine = distributed.fingerprint(distributed.environment(), data.digest(), 11, "numpy")
+    ran = distributed.render_task(data, 0, (0, 1), (0, 0, 2, 2), 11, "numpy", expected=mine)
+    assert ran.fingerprint == mine and ran.sum_xyz.shape == (2, 2, 3)
+    other = distributed.render_task(data, 0, (0, 1), (0, 0, 2, 2), 12, "numpy", expected=mine)
+    assert other.fingerprint != mine and other.sum_xyz is None
+    monkeypatch.setattr(distributed, "sources_digest", lambda: "other sources")
+    assert distributed.render_task(data, 0, (0, 1), (0, 0, 2, 2), 11, "numpy", expected=mine).sum_xyz is None
+    import pickle
+
+    copy = pickle.loads(pickle.dumps(data))
+    assert getattr(copy, "_digest", None) is None and copy.digest() == data.digest()
 
 
 @pytest.mark.slow

@@ -257,5 +257,5 @@ def test_a_light_other_than_an_envmap_needs_a_spectrum():
 
 def test_the_scene_file_names_a_missing_image(write_scene, scene_data):
     scene_data["lights"] = [{"kind": "envmap", "image": "missing.npy", "basis": [1.0, 1.0, 1.0]}]
-    with pytest.raises(SpectralError, match=r"lights\[0\].image: the file .*missing.npy does not exist"):
+    with pytest.raises(SpectralError, match=r"lights\[0\].image: image file .*missing.npy does not exist"):
         load_scene(write_scene(scene_data))

@@ -305,9 +305,9 @@ BAD = [
     ("lights[0]", {**AREA_LIGHT, "area_shape": "disk"},
      ["lights[0].area_shape", "'disk'", "allowed: rectangle, ellipse"]),
     ("lights[0]", {**AREA_LIGHT, "area_axes": [[1, 0, 0], [0, 0, 0], [0, 0, 1]]},
-     ["lights[0].area_axes: its column 1 (local Y) must have a finite, non-zero length, found 0"]),
-    ("lights[0]", {**AREA_LIGHT, "area_axes": [[1e300, 0, 0], [1e300, 0, 0], [0, 0, 1]]},
-     ["lights[0].area_axes: its column 0 (local X) must have a finite, non-zero length, found inf"]),
+     ["lights[0].area_axes: its column 1 (local Y) must have a non-zero length"]),
+    ("lights[0]", {**AREA_LIGHT, "area_axes": [[1e300, 0, 0], [1e300, 0, 0], [0, 0, 1]]},  # a length of 1.4e300 is fine
+     ["lights[0].area_axes: its column 1 (local Y) must have a non-zero length"]),
     ("lights[0]", {**AREA_LIGHT, "area_axes": [[1, 1, 0], [0, 1, 0], [0, 0, 1]]},
      ["lights[0].area_axes: its columns (local X, Y, Z) must be orthogonal", "local X and Y at cosine 0.707"]),
     ("lights[0]", {**AREA_LIGHT, "area_axes": [[1, 0], [0, 1]]}, ["lights[0].area_axes: expected a 3 × 3 matrix"]),

@@ -77,7 +77,7 @@ def test_csv_bad_files_name_file_line_and_problem(tmp_path, case):
 
 
 def test_csv_missing_file_and_unknown_unit(tmp_path):
-    with pytest.raises(SpectralError, match="cannot read spectrum file .*missing.csv"):
+    with pytest.raises(SpectralError, match="spectrum file .*missing.csv does not exist"):
         spectra.from_csv(tmp_path / "missing.csv")
     with pytest.raises(SpectralError, match="unknown wavelength unit 'mm'; use one of nm, um"):
         spectra.from_csv(write(tmp_path, "400,1\n"), units="mm")
@@ -198,7 +198,7 @@ BAD_SPECS = {
     "empty sum": ({"type": "sum", "of": []}, r"'of' of a 'sum' spectrum must be a non-empty list"),
     "nested error": ({"type": "sum", "of": [1, {"type": "scale", "of": {"type": "x"}, "factor": 2}]},
                      r"light\.colour\.of\[1\]\.of: unknown spectrum type 'x'"),
-    "missing csv": ({"type": "csv", "path": "nowhere.csv"}, r"cannot read spectrum file .*nowhere.csv"),
+    "missing csv": ({"type": "csv", "path": "nowhere.csv"}, r"spectrum file .*nowhere.csv does not exist"),
     "misspelt field": ({"type": "gaussian", "peak": 550, "width": 50, "heigth": 0.5},
                        r"light\.colour: unknown field 'heigth' in a spectrum of type 'gaussian' "
                        r"\(allowed: type, peak, width, height\)"),
