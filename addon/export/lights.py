@@ -23,7 +23,7 @@ import numpy as np
 from ..props.spectrum_values import to_spectrum
 from ..tracer import spectra
 from ..tracer.scene import Light
-from ..nodes.graph import colour, number, output_source, reflectance_spectrum
+from ..nodes.graph import colour, finite, number, output_source, reflectance_spectrum
 from .world import radiant_light
 
 SUPPORTED = ("SUN", "POINT", "SPOT", "AREA")
@@ -43,9 +43,10 @@ def _axis(matrix_world, column: int) -> np.ndarray:
 def light_colour(light, owner: str, notes) -> tuple[spectra.Spectrum, float]:
     """(emission spectrum, factor) of a Blender light's colour as Cycles combines it: Color × the
     Temperature's black body × an Emission node's Color and Strength."""
-    rgb = np.maximum(np.array(light.color[:3], dtype=np.float64), 0.0)
+    rgb = np.maximum(np.array(finite(tuple(light.color[:3]), f"{owner} Color"), dtype=np.float64), 0.0)
     if light.use_temperature:
-        spectrum = spectra.scaled_from_rgb(rgb) * spectra.blackbody_of_luminance_one(light.temperature)
+        temperature = finite(float(light.temperature), f"{owner} Temperature")
+        spectrum = spectra.scaled_from_rgb(rgb) * spectra.blackbody_of_luminance_one(temperature)
     else:
         spectrum = spectra.emission_from_rgb(rgb)
     factor = 1.0

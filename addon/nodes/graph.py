@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..tracer import colorimetry, spectra
+from ..tracer.errors import SpectralError
 from .notes import Notes
 
 
@@ -66,17 +67,26 @@ def _where(owner: str, node, name: str) -> str:
     return f"{owner} ▸ {node.name} ▸ {name}"
 
 
+def finite(value, where: str):
+    """`value` (a number or a colour) where every component is finite, else a SpectralError naming `where`:
+    a script or driver can set NaN or infinity where Blender's interface cannot."""
+    components = np.atleast_1d(np.asarray(value, dtype=np.float64))
+    if not np.all(np.isfinite(components)):
+        raise SpectralError(f"{where}: must be finite, found {', '.join(f'{c:g}' for c in components)}")
+    return value
+
+
 def number(node, name: str, owner: str, notes: Notes, *, attribute: bool = False):
     """The value of `node`'s input `name`: a float, or with `attribute` an `Attribute` where an Attribute
     node (Fac) feeds it. Another feeding node is noted and its default returned."""
     socket = node.inputs[name]
     found = source(socket)
-    default = float(socket.default_value)
+    default = finite(float(socket.default_value), _where(owner, node, name))
     if found is None:
         return default
     feeder, output = found
     if feeder.bl_idname == "ShaderNodeValue":
-        return float(feeder.outputs[0].default_value)
+        return finite(float(feeder.outputs[0].default_value), _where(owner, feeder, "Value"))
     if attribute and feeder.bl_idname == "ShaderNodeAttribute" and feeder.attribute_type == "GEOMETRY":
         return Attribute(feeder.attribute_name)
     notes.add(f"{_where(owner, node, name)} is driven by {feeder.name!r}, which cannot be converted: "
@@ -89,12 +99,13 @@ def colour(node, name: str, owner: str, notes: Notes):
     of constant temperature feeds it. Another feeding node is noted and the socket's value returned."""
     socket = node.inputs[name]
     found = source(socket)
-    default = tuple(float(value) for value in socket.default_value[:3])
+    default = finite(tuple(float(value) for value in socket.default_value[:3]), _where(owner, node, name))
     if found is None:
         return default
     feeder, _output = found
     if feeder.bl_idname == "ShaderNodeRGB":
-        return tuple(float(value) for value in feeder.outputs[0].default_value[:3])
+        return finite(tuple(float(value) for value in feeder.outputs[0].default_value[:3]),
+                      _where(owner, feeder, "Color"))
     if feeder.bl_idname == "ShaderNodeBlackbody":
         temperature = number(feeder, "Temperature", owner, notes)
         return Blackbody(temperature)

@@ -1,7 +1,7 @@
 """Property-based fuzzing (issue 30, item 7) with hypothesis, deterministic (`derandomize`) and bounded (few
 examples, each cheap): the scene file reader, the CSV and spectrum readers, the VDB reader and the command
 line's option combinations. Each example ends in a clear SpectralError (or exit 1 with a message) or a finite
-result: never merely "it did not crash". The Blender exporter is not fuzzed here (issue 30 leaves it open)."""
+result: never merely "it did not crash". The Blender exporter is fuzzed in tests/addon/test_export_fuzz.py."""
 
 import copy
 import json
