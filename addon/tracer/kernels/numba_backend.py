@@ -469,21 +469,31 @@ def _shadow_blocked(ks, ox, oy, oz, wx, wy, wz, distance, hit):
 
 @jit(inline="always")
 def _surface_emission(ks, triangle, distance, dx, dy, dz, scattered, survival, n, path, light):
-    """Radiance of an emissive surface that a path hits at `distance` along d: plain for a camera ray,
-    MIS-weighted against light sampling after a scattering vertex, with the path's `survival` along the ray
-    (as `_escape`)."""
+    """Radiance of an emissive surface that a path hits at `distance` along d, added by `_add_hit_light` (its
+    light pdf: the mesh light's choice times its point's pdf in solid angle)."""
     s = ks.surfaces.surface[triangle]
     chosen = ks.surfaces.light[s]
     if chosen < 0:
         return
     for i in range(n):
         light.radiance[i] = table_at(ks.lights.spd, chosen, on_grid(path.lams[i]))
-    if not scattered:
-        mean_r, weight = _mean(path.r_u, n), 1.0
-    else:
+    light_pdf = 0.0
+    if scattered:
         normal = ks.surfaces.normal[triangle]
         cos_light = abs(dx * normal[0] + dy * normal[1] + dz * normal[2])
         light_pdf = ks.lights.pmf[chosen] * emitter_pdf(ks.surfaces.area[s], distance, cos_light)
+    _add_hit_light(scattered, survival, light_pdf, n, path, light)
+
+
+@jit(inline="always")
+def _add_hit_light(scattered, survival, light_pdf, n, path, light):
+    """Add the radiance in `light.radiance` of a light that the path's ray hit: plain for a camera ray; after a
+    scattering vertex, MIS-weighted against light sampling of pdf `light_pdf` (the light's choice included),
+    with the path's `survival` along the ray as a shadow ray would have given it (`_transmittance`: 1 where
+    `r_l` has the null-event probabilities)."""
+    if not scattered:
+        mean_r, weight = _mean(path.r_u, n), 1.0
+    else:
         for i in range(n):
             light.r_l[i] = path.r_u[i] * survival + path.r_l[i] * light_pdf
         mean_r, weight = _mean(light.r_l, n), survival
@@ -870,22 +880,12 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, n, path, ve
 
 @jit(inline="always")
 def _escape(ks, dx, dy, dz, scattered, survival, n, path, light):
-    """Radiance of the infinite lights seen along the escaping ray: plain for a camera ray, MIS-weighted
-    against light sampling after a scattering vertex, with the path's `survival` along the ray as a shadow
-    ray would have given it (`_transmittance`: 1 where `r_l` has the null-event probabilities)."""
+    """Radiance of the infinite lights seen along the escaping ray, each added by `_add_hit_light`."""
     for chosen in range(ks.lights.kind.shape[0]):
         for i in range(n):
             light.radiance[i] = infinite_radiance(ks, chosen, on_grid(path.lams[i]), dx, dy, dz)
-        if not scattered:
-            mean_r, weight = _mean(path.r_u, n), 1.0
-        else:
-            light_pdf = ks.lights.pmf[chosen] * infinite_pdf(ks, chosen, dx, dy, dz)
-            for i in range(n):
-                light.r_l[i] = path.r_u[i] * survival + path.r_l[i] * light_pdf
-            mean_r, weight = _mean(light.r_l, n), survival
-        if mean_r > 0.0:
-            for i in range(n):
-                path.radiance[i] += path.beta[i] * light.radiance[i] * weight / mean_r
+        light_pdf = ks.lights.pmf[chosen] * infinite_pdf(ks, chosen, dx, dy, dz) if scattered else 0.0
+        _add_hit_light(scattered, survival, light_pdf, n, path, light)
 
 
 @jit(inline="always")
