@@ -60,13 +60,13 @@ def export_surfaces(obj, matrix_world, depsgraph, notes: Notes) -> list[Surface]
     vertices = vertices @ matrix[:3, :3].T + matrix[:3, 3]
     materials = slot_materials(obj, depsgraph) or [None]
     slots = np.clip(slots, 0, len(materials) - 1)  # Blender renders an index past the slots with the last one
+    several = len(set(materials)) > 1
     surfaces = []
     for index in np.unique(slots):
         material = materials[index]
         look = read_surface_shader(material, notes)
         if look is None:
             continue
-        several = len(set(materials)) > 1
         name = obj.name + (f" ▸ {material.name if material is not None else 'no material'}" if several else "")
         surfaces.append(_surface(name, vertices, triangles[slots == index], look))
     return surfaces

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..tracer.wavelengths import GRID
 from .graph import colour, emission_spectrum, number, output_source, reflectance_spectrum, source
 from .notes import Notes
 
@@ -101,7 +102,7 @@ def read_surface_shader(material, notes: Notes) -> SurfaceLook | None:
     found = output_source(material.node_tree, "Surface")
     if found is None:
         return None
-    zeros = np.zeros_like(default_look().reflectance)
+    zeros = np.zeros(GRID.size)
     look = {"reflectance": zeros.copy(), "emission": zeros.copy()}
     _closure(found[0], f"material {material.name!r}", notes, 1.0, look)
     return SurfaceLook(np.clip(look["reflectance"], 0.0, 1.0), look["emission"])
