@@ -8,7 +8,9 @@ handler means adding it to its module's list, nowhere else.
 
 import bpy
 
-from . import cli, engine, kernel_warmup, material_preview
+from . import eevee_stand_in
+from .cli import command as cli
+from .engine import kernel_warmup, render_engine
 from .operators import albedo_levels
 from .operators import emulation as emulation_operators
 from .operators import export as export_operators
@@ -19,7 +21,7 @@ from .operators import spectrum as spectrum_operators
 from .props import attach, curves, light, material, render, spectrum
 from .ui import lighting, material as material_ui, presets as preset_ui, render as render_ui, sidebar
 
-MODULES = (curves, spectrum, material, light, render, attach, engine, material_preview, kernel_warmup,
+MODULES = (curves, spectrum, material, light, render, attach, render_engine, eevee_stand_in, kernel_warmup,
            spectrum_operators, preset_operators, albedo_levels, export_operators, import_operators,
            emulation_operators, render_image, preset_ui, material_ui, lighting, render_ui, sidebar, cli)
 

@@ -1,7 +1,7 @@
 """The Rendered viewport's responsiveness on every demo (issue 17 item 1): from an edit to the first new
 image, and how often the image refreshes while it refines.
 
-Each demo's .blend is opened in Blender-as-a-module (`addon.cli.open_scene`) and shown in a 512×512 view
+Each demo's .blend is opened in Blender-as-a-module (`addon.cli.command.open_scene`) and shown in a 512×512 view
 through its camera, with `addon.viewport_render.ViewportRenderer` as the engine's `view_update` drives it
 (Blender-as-a-module has no window to draw in). Once the full view refines, an edit is made (the seed
 changes, so every sample changes) and timed as the viewport's main thread and render thread see it:
@@ -22,7 +22,8 @@ import time
 
 import bpy
 
-from addon import cli, dispatch
+from addon.cli import command as cli
+from addon.jobs import tracer_job
 from addon.export.scene import export_scene
 from addon.viewport_render import ViewportRenderer
 from bench.measure import machine
@@ -43,13 +44,13 @@ def parse(argv=None):
 
 
 class TimedRun:
-    """`dispatch.run`, remembering when each render returned."""
+    """`tracer_job.render_tracer`, remembering when each render returned."""
 
     def __init__(self):
         self.returned = []
 
     def __call__(self, *args, **options):
-        result = dispatch.run(*args, **options)
+        result = tracer_job.render_tracer(*args, **options)
         self.returned.append(time.perf_counter())
         return result
 

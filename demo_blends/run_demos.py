@@ -3,7 +3,7 @@ the figures that prove each one.
 
 Each demo is a scene of a .blend file in `demo_blends/` (`build_blends.DEMO_SCENES`; files that are
 missing are built first). It is opened in Blender-as-a-module, exported by the add-on (`addon.cli`)
-and rendered by the add-on's dispatcher. Written into the output folder:
+and rendered by the add-on's tracer job (`render_tracer`). Written into the output folder:
 - `<name>.exr`: the raw film, multilayer (passes Combined: linear Rec.709, XYZ and XYZ Variance, named as F12's:
   `ViewLayer.XYZ.X`, ...);
 - `<name>.png`: the display image, denoised with Open Image Denoise (`display`), Standard view at the scene's exposure;
@@ -24,7 +24,8 @@ from typing import Callable
 import numpy as np
 
 import addon
-from addon import cli, dispatch
+from addon.cli import command as cli
+from addon.jobs.tracer_job import render_tracer
 from addon.tracer import colorimetry, image_io
 from addon.tracer.render import render
 from addon.tracer.scene import Scene
@@ -159,7 +160,7 @@ def render_demo(demo: Demo, blends: Path, scale: float, quality: float) -> Resul
     for warning in export.warnings:
         print(f"warning: {warning}")
     scene = replace(export.scene, settings=replace(export.scene.settings, spp=spp))
-    rendered = dispatch.run(scene)
+    rendered = render_tracer(scene)
     film = rendered.film
     return Result(demo, scene, film.xyz, film.variance, rendered.seconds, blender_scene.view_settings.exposure)
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 # The tests whose results come from rendering or from fits to rendered data.
-TEST_PATHS = ("tests/tracer", "tests/demos", "tests/cycles")
+TEST_PATHS = ("tests/tracer", "tests/demos", "tests/cycles_emulation")
 # NumPy's dispatchable x86-64 targets above its baseline (unknown names are ignored by NumPy).
 NUMPY_X86_TARGETS = ("X86_V3", "X86_V4", "AVX512_ICL", "AVX512_SPR")
 

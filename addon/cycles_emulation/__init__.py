@@ -6,5 +6,5 @@ and where, from an estimate of their colour error), `parameters` (per-band numbe
 `composite` (renders → XYZ film). Blender modules: `shaders` (volume node
 trees, SVM or OSL), `surfaces` (RGB materials upsampled per band), `setup` (one render's settings, lights,
 World and materials), `fluids` (Volume objects standing in for fluid domains), `state` (temporary changes
-undone), `job` (the driver: the emulation's render job, addon/jobs.py).
+undone), `job` (the driver: the emulation's render job, addon/jobs/).
 """

@@ -1,5 +1,5 @@
 """The emulation driver: one Cycles render after another, each set up on the user's scene and undone, their
-R, G, B composited into an XYZ film: a render job (addon/jobs.py) of the Cycles emulation.
+R, G, B composited into an XYZ film: a render job (addon/jobs/) of the Cycles emulation.
 
 Each planned render (up to three bands, `parameters.plan`) is made twice, with seeds 2·seed and 2·seed + 1
 and half the samples each, so the film has a variance estimate (`composite`); Cycles keeps its scene
@@ -20,7 +20,7 @@ import bpy
 import numpy as np
 
 from ..export.scene import Export
-from ..jobs import Job
+from ..jobs.protocol import Job
 from ..tracer import image_io
 from ..tracer.errors import SpectralError
 from ..tracer.render import RenderResult

@@ -20,7 +20,7 @@ render's own depsgraph never writes them back to the original data), and the ins
 Geometry Nodes volumes (Mesh to Volume, Volume Cube, ...) and instanced collections, each at its
 instance matrix. Nothing is written to disk here and the Blender data is not changed.
 
-The add-on exports render depsgraphs (F12, and `addon.render_export` for everything else) and the
+The add-on exports render depsgraphs (F12, and `addon.export.rendered` for everything else) and the
 Rendered viewport's own (see `export_scene`); scripts may pass a viewport one. Setting an add-on property
 does not tag its data block for re-evaluation, so a viewport depsgraph may hold stale copies of the
 materials, lights, worlds and scene: those are tagged and re-evaluated first (the Rendered viewport

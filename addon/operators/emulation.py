@@ -4,7 +4,7 @@ their estimated colour error, shown in the Render settings (`band_plan`; nothing
 import bpy
 
 from ..cycles_emulation.band_plan import plan_bands
-from ..render_export import export_rendered
+from ..export.rendered import export_rendered
 from ..tracer.errors import SpectralError
 
 # Scene name → the last estimate's summary, for the panel (not saved with the file: it describes the

@@ -5,7 +5,7 @@ from pathlib import Path
 import bpy
 from bpy_extras.io_utils import ExportHelper
 
-from ..render_export import export_rendered
+from ..export.rendered import export_rendered
 from ..tracer.errors import SpectralError
 from ..tracer.scene_io import SCENE_FILE, save_scene
 

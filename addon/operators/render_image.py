@@ -1,7 +1,7 @@
 """The "Render to Image" operator: renders the scene into a float Image (and optionally a multilayer
 EXR) without the Render window.
 
-The render is the render job the Render settings choose (addon/jobs.py). Run from the UI (invoke) it
+The render is the render job the Render settings choose (addon/jobs/). Run from the UI (invoke) it
 renders in the background (the job starts, then steps on each timer tick: the Cycles emulation makes one
 Cycles render per tick on the main thread), shows progress and stops on Esc; run from a script (execute)
 it renders in place. The film goes to the image and the file through addon/output.py. Only a finished
@@ -10,9 +10,10 @@ render writes anything: a cancelled or failed one leaves the image and the file 
 
 import bpy
 
-from .. import jobs
+from ..jobs.kinds import render_job
+from ..jobs.protocol import Job
 from ..output import denoising, placement, write_outputs
-from ..render_export import export_rendered
+from ..export.rendered import export_rendered
 from ..tracer.errors import SpectralError
 
 TIMER_SECONDS = 0.25
@@ -36,11 +37,11 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     _message = None
     _region = None  # where the film goes in the image (output.placement), as exported
 
-    def _start(self, context) -> jobs.Job | None:
+    def _start(self, context) -> Job | None:
         try:
             export = export_rendered(context.scene, context.view_layer)
             self._region = placement(context.scene)
-            job = jobs.render_job(context.scene, export)
+            job = render_job(context.scene, export)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Nothing rendered: {problem}")
             return None
@@ -49,7 +50,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         self._report_warnings(job)
         return job
 
-    def _report_warnings(self, job: jobs.Job) -> None:
+    def _report_warnings(self, job: Job) -> None:
         """The job's warnings not shown yet: the emulation finds some while it renders (textured surfaces)."""
         for warning in job.warnings[self._warnings_shown:]:
             self.report({"WARNING"}, warning)
@@ -61,7 +62,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             context.workspace.status_text_set(message)
             self._message = message
 
-    def _finish(self, context, job: jobs.Job) -> set:
+    def _finish(self, context, job: Job) -> set:
         self._report_warnings(job)
         if job.error is not None:
             self.report({"ERROR"}, f"Render failed, nothing written: {job.error}")

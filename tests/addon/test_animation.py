@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from addon import dispatch
+from addon.jobs import tracer_job
 from addon.props import curves
 from addon.tracer import image_io, spectra
 from tests.addon.builders import basic_scene
@@ -51,7 +51,7 @@ def test_f12_animation_exports_every_frame_from_its_depsgraph(registered, tmp_pa
     scene, cloud = _animated_scene(tmp_path)
     curve = curves.sample(curves.find_mapping(cloud.material_slots[0].material.spectral.extinction.curve))
     exported = []
-    monkeypatch.setattr(dispatch, "run", lambda tracer_scene, *args, **kwargs: exported.append(tracer_scene))
+    monkeypatch.setattr(tracer_job, "render_tracer", lambda tracer_scene, *args, **kwargs: exported.append(tracer_scene))
     scene.render.engine = "SPECTRAL_VOLUME"
     scene.render.filepath = str(tmp_path / "frame_")
     assert bpy.ops.render.render(animation=True) == {"FINISHED"}

@@ -10,7 +10,7 @@ from pathlib import Path
 import bpy
 import pytest
 
-from addon.frame_options import check_frame_paths, frame_path, parse_frames
+from addon.cli.frame_options import check_frame_paths, frame_path, parse_frames
 from addon.tracer.errors import SpectralError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -154,7 +154,7 @@ def test_a_later_frame_that_fails_is_named_and_the_earlier_frames_kept(registere
 
 def test_an_exr_and_a_png_naming_one_file_are_refused_before_opening(tmp_path, monkeypatch, capsys):
     """Issue 30: `--png` a link to `--out` would replace the EXR just written."""
-    from addon import cli
+    from addon.cli import command as cli
 
     out = tmp_path / "out_0001.exr"
     out.write_bytes(b"previous render")

@@ -253,7 +253,7 @@ def _snapshot(scene) -> dict:
 def test_scene_is_untouched_after_a_render_and_after_a_cancelled_one(registered, tmp_path):
     scene, _cloud, _plane = _surface_scene(tmp_path)
     scene.render.engine = "SPECTRAL_VOLUME"
-    bpy.context.view_layer.update()  # the engine's Material Preview nodes are made now (`material_preview`), not by a render
+    bpy.context.view_layer.update()  # the engine's Material Preview nodes are made now (`eevee_stand_in`), not by a render
     before = _snapshot(scene)
     export = export_scene(bpy.context.evaluated_depsgraph_get())
     job = EmulationJob(scene, export.scene, export.warnings, band_count=6, spp=2)

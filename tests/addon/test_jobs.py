@@ -1,4 +1,4 @@
-"""Render jobs (addon/jobs.py): one protocol for the tracer and the Cycles emulation, chosen in one place."""
+"""Render jobs (addon/jobs/): one protocol for the tracer and the Cycles emulation, chosen in one place."""
 
 import inspect
 import re
@@ -6,10 +6,11 @@ from pathlib import Path
 
 import pytest
 
-from addon import jobs
+from addon.jobs import kinds
 from addon.cycles_emulation.job import EmulationJob
 from addon.export.scene import export_scene
-from addon.jobs import Job, TracerJob
+from addon.jobs.protocol import Job
+from addon.jobs.tracer_job import TracerJob
 from tests.addon.builders import basic_scene
 
 bpy = pytest.importorskip("bpy")
@@ -38,9 +39,9 @@ def test_every_kind_offers_the_whole_protocol_with_its_signatures(kind):
 def test_the_render_settings_choose_the_kind_and_its_job(registered, tmp_path, renderer):
     scene, _cloud = basic_scene(tmp_path)
     scene.spectral.renderer = renderer
-    assert jobs.kind(scene.spectral) is KINDS[renderer]
+    assert kinds.kind(scene.spectral) is KINDS[renderer]
     export = export_scene(bpy.context.evaluated_depsgraph_get())
-    job = jobs.render_job(scene, export, spp=2)
+    job = kinds.render_job(scene, export, spp=2)
     assert type(job) is KINDS[renderer]
     assert (job.fraction, job.message, job.result, job.error) == (0.0, None, None, None)
     assert isinstance(job.warnings, list) and job.describe() and not job.succeeded
@@ -52,4 +53,4 @@ def test_only_jobs_reads_the_renderer_to_choose():
     readers = sorted(str(path.relative_to(ADDON)) for path in ADDON.rglob("*.py")
                      if path.parts[len(ADDON.parts)] not in ("ui", "props")
                      and re.search(r"\.renderer\b", path.read_text(encoding="utf-8")))
-    assert readers == ["jobs.py"]
+    assert readers == ["jobs/kinds.py"]

@@ -1,9 +1,9 @@
 """The kernel starts compiling in the background once a scene renders with this engine's local kernel
-(addon/kernel_warmup.py): after a switch to the engine or loading a file that uses it, not otherwise."""
+(addon/engine/kernel_warmup.py): after a switch to the engine or loading a file that uses it, not otherwise."""
 
 import pytest
 
-from addon import kernel_warmup
+from addon.engine import kernel_warmup
 from addon.props.render import ENGINE_ID
 from addon.tracer import background_compile
 

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from addon import cli
+from addon.cli import command as cli
 from addon.export.scene import export_scene
-from addon.jobs import TracerJob
+from addon.jobs.tracer_job import TracerJob
 from addon.tracer import image_io
 from addon.tracer.errors import SpectralError
 from addon.tracer.render import render
@@ -200,7 +200,7 @@ def test_job_says_when_the_kernel_compiles_until_rendering_starts(registered, tm
 
 
 def test_f12_stats_say_when_the_kernel_compiles_then_count_samples(registered, tmp_path, compiling, monkeypatch):
-    from addon.engine import SpectralVolumeEngine
+    from addon.engine.render_engine import SpectralVolumeEngine
 
     scene, _cloud = basic_scene(tmp_path)
     scene.render.engine = "SPECTRAL_VOLUME"

@@ -5,12 +5,13 @@ import contextlib
 
 import pytest
 
-import addon.cli
-import addon.engine
-import addon.jobs
+import addon.cli.command
+import addon.engine.render_engine
+import addon.jobs.kinds
+import addon.jobs.tracer_job
 import addon.operators.emulation
 from addon.props.render import ENGINE_ID
-from addon.render_export import export_rendered
+from addon.export.rendered import export_rendered
 from addon.tracer.errors import SpectralError
 from addon.tracer.scene_io import load_scene
 from tests.addon.builders import add_camera, add_sun, add_volume, spectral_material, write_vdb
@@ -57,13 +58,13 @@ F12 = {"Shown": (4, 3, 2), "Hidden In Viewport": (4, 3, 2), "Disabled In Viewpor
 def test_f12_renders_by_render_visibility(registered, tmp_path, monkeypatch):
     """The reference: what F12's engine exports (its render is stopped before tracing)."""
     _visibility_scene(tmp_path)
-    exported, export_scene = [], addon.engine.export_scene
+    exported, export_scene = [], addon.engine.render_engine.export_scene
 
     def record_and_stop(depsgraph):
         exported.append(export_scene(depsgraph).scene)
         raise SpectralError("recorded, not rendered")
 
-    monkeypatch.setattr(addon.engine, "export_scene", record_and_stop)
+    monkeypatch.setattr(addon.engine.render_engine, "export_scene", record_and_stop)
     with contextlib.suppress(RuntimeError):
         bpy.ops.render.render()
     assert [_media(scene) for scene in exported] == [F12]
@@ -72,12 +73,12 @@ def test_f12_renders_by_render_visibility(registered, tmp_path, monkeypatch):
 def _render_to_image(monkeypatch, tmp_path):
     exported = []
 
-    class Recorded(addon.jobs.TracerJob):
+    class Recorded(addon.jobs.tracer_job.TracerJob):
         def run(self, progress=None, notice=None, cancel=None):
             exported.append(self.scene)
             self.error = "recorded, not rendered"
 
-    monkeypatch.setattr(addon.jobs, "TracerJob", Recorded)
+    monkeypatch.setattr(addon.jobs.kinds, "TracerJob", Recorded)
     with contextlib.suppress(RuntimeError):
         bpy.ops.spectral.render_image()
     return exported[0]
@@ -103,7 +104,7 @@ def _estimate_bands(monkeypatch, tmp_path):
 
 
 def _cli(monkeypatch, tmp_path):
-    return addon.cli.export_context_scene().scene
+    return addon.cli.command.export_context_scene().scene
 
 
 @pytest.mark.parametrize("path", [_render_to_image, _export_scene, _estimate_bands, _cli],

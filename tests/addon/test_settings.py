@@ -182,7 +182,7 @@ def test_ui_strings_spell_color_as_blender_does(registered):
 
 
 def test_only_the_generic_panels_that_apply_are_shown(registered):
-    from addon import engine
+    from addon.engine import render_engine as engine
 
     shown = {panel.__name__ for panel in _all_panels() if "SPECTRAL_VOLUME" in getattr(panel, "COMPAT_ENGINES", ())}
     for applies in ("DATA_PT_lens", "DATA_PT_spot", "DATA_PT_volume_grids", "RENDER_PT_format", "PARTICLE_PT_render",

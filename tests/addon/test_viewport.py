@@ -1,5 +1,5 @@
 """The Rendered viewport: its camera from the 3D view's matrices, the progressive schedule, restarts and
-cancellation (`addon.viewport_render`, with a stand-in renderer where no kernel is needed), and the
+cancellation (`addon.engine.viewport_render`, with a stand-in renderer where no kernel is needed), and the
 engine's `view_update` / `view_draw` on a Blender scene (Blender-as-a-module has no window: they are
 called here with stand-ins for the engine and the 3D view; drawing goes to a `gpu` offscreen buffer)."""
 
@@ -11,8 +11,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from addon import dispatch
-from addon.engine import SpectralVolumeEngine, region_camera
+from addon.jobs import tracer_job
+from addon.engine.render_engine import SpectralVolumeEngine, region_camera
 from addon.export.camera import export_camera
 from addon.export.scene import export_scene
 from addon.output import blender_rows, with_alpha
@@ -21,7 +21,7 @@ from addon.tracer.film import Film
 from addon.tracer.lowering import camera_extent
 from addon.tracer.render import RenderResult, render
 from addon.tracer.scene import look_at
-from addon.viewport_render import (RESOLUTION_DIVISORS, Step, ViewportRenderer, filled, resized, schedule,
+from addon.engine.viewport_render import (RESOLUTION_DIVISORS, Step, ViewportRenderer, filled, resized, schedule,
                                    view_camera, view_pixels)
 from tests.addon.builders import basic_scene, tiny_render
 from tests.support import scenes
@@ -430,7 +430,7 @@ def test_a_restart_stops_a_real_render_quickly(registered, tmp_path):
 
     def run(step_scene, *args, **options):
         sizes.append((step_scene.camera.width, step_scene.camera.height))
-        result = dispatch.run(step_scene, *args, **options)
+        result = tracer_job.render_tracer(step_scene, *args, **options)
         returned.append((time.perf_counter(), result.cancelled))
         return result
 

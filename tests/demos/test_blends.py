@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.ndimage import maximum_filter1d
 
-from addon import cli
+from addon.cli import command as cli
 from addon.tracer.spectra import Spectrum
 from demo_blends import build_blends, run_demos, scenes
 from tests.support.scene_compare import assert_same_scene

@@ -5,8 +5,8 @@ to it. The first render then usually finds the kernel compiled instead of compil
 
 import bpy
 
-from .props.render import ENGINE_ID
-from .tracer import background_compile
+from ..props.render import ENGINE_ID
+from ..tracer import background_compile
 
 
 def uses_local_kernel(scene) -> bool:

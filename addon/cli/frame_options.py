@@ -5,7 +5,7 @@
 import re
 from pathlib import Path
 
-from .tracer.errors import SpectralError
+from ..tracer.errors import SpectralError
 
 _FRAME_ITEM = re.compile(r"\s*(-?\d+)\s*(?:-\s*(-?\d+)\s*)?")
 _RESOLUTION = re.compile(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*")

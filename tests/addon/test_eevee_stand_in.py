@@ -1,11 +1,11 @@
-"""The EEVEE Material Preview of spectral materials (`addon.material_preview`): a Principled Volume on an
+"""The EEVEE Material Preview of spectral materials (`addon.eevee_stand_in`): a Principled Volume on an
 EEVEE-only output, kept in step with the spectral settings, beside the user's own nodes."""
 
 import numpy as np
 import pytest
 
-from addon import material_preview
-from addon.material_preview import OUTPUT, PRINCIPLED, sync
+from addon import eevee_stand_in
+from addon.eevee_stand_in import OUTPUT, PRINCIPLED, sync
 
 bpy = pytest.importorskip("bpy")
 
@@ -36,12 +36,12 @@ def test_a_chromatic_extinction_is_averaged_as_the_eye_sees_it(registered, tmp_p
     material = spectral_material()
     extinction = material.spectral.extinction
     extinction.source = "CSV"
-    assert material_preview.preview_values(material.spectral)["Density"] == 0.0  # no file yet: an error counts 0
+    assert eevee_stand_in.preview_values(material.spectral)["Density"] == 0.0  # no file yet: an error counts 0
     # 100 in the UV, where the eye sees nothing, and 2 over the visible: the preview shows 2.
     rows = [(nm, 100.0 if nm < 370 else 2.0) for nm in range(250, 831)]
     (tmp_path / "extinction.csv").write_text("".join(f"{nm},{value}\n" for nm, value in rows))
     extinction.filepath = str(tmp_path / "extinction.csv")
-    assert material_preview.preview_values(material.spectral)["Density"] == pytest.approx(2.0, rel=1e-3)
+    assert eevee_stand_in.preview_values(material.spectral)["Density"] == pytest.approx(2.0, rel=1e-3)
 
 
 def test_the_users_nodes_stay_and_plain_materials_are_left_alone(registered):
@@ -61,7 +61,7 @@ def test_edits_reach_the_preview_through_the_depsgraph_handler(registered):
     material = spectral_material()
     bpy.ops.mesh.primitive_cube_add()
     bpy.context.object.data.materials.append(material)
-    assert material_preview.sync_updated in bpy.app.handlers.depsgraph_update_post
+    assert eevee_stand_in.sync_updated in bpy.app.handlers.depsgraph_update_post
     material.spectral.density_scale = 7.0
     material.update_tag()
     bpy.context.view_layer.update()  # runs the depsgraph_update_post handlers

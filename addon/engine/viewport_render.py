@@ -10,8 +10,8 @@ latest image, at the view's size (low resolutions scaled up by nearest neighbour
 pick up on the main thread. With Viewport Denoise on, the full view's images are denoised (OIDN's fast
 quality, addon/tracer/denoise.py) once every pixel has a sample; the low-resolution steps stay raw. One
 thread renders every request in turn, so two kernels never run at once and a burst of edits renders only
-the last one. The thread never touches `bpy`; renders go through `dispatch` (this computer or the Dask
-farm), like F12's tracer job's; unlike a render job (addon/jobs.py), one renderer serves request after
+the last one. The thread never touches `bpy`; renders go through `render_tracer` (this computer or the Dask
+farm), like F12's tracer job's; unlike a render job (addon/jobs/), one renderer serves request after
 request, each cancelling the last. Its pixels are laid out as Blender's (addon/output.py).
 """
 
@@ -22,12 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import dispatch
-from .output import blender_rows, with_alpha
-from .tracer.denoise import denoised_rgb
-from .tracer.errors import SpectralError
-from .tracer.progress import Throttle
-from .tracer.scene import Camera, Scene
+from ..jobs.tracer_job import render_tracer
+from ..output import blender_rows, with_alpha
+from ..tracer.denoise import denoised_rgb
+from ..tracer.errors import SpectralError
+from ..tracer.progress import Throttle
+from ..tracer.scene import Camera, Scene
 
 RESOLUTION_DIVISORS = (8, 4, 2)  # the quick low-resolution steps before the full view, 1 sample each
 UNIT_SECONDS = 0.05  # the render's units of work: a change stops the render in flight within about this
@@ -128,9 +128,9 @@ class Frame:
 
 class ViewportRenderer:
     """Owns the viewport's render thread. Main thread: `render`, `fail`, `close`, and reading `frame`,
-    `status` and `busy`. `run` (default `dispatch.run`) renders one step; tests pass a stand-in."""
+    `status` and `busy`. `run` (default `jobs.tracer_job.render_tracer`) renders one step; tests pass a stand-in."""
 
-    def __init__(self, run=dispatch.run):
+    def __init__(self, run=render_tracer):
         self._run = run
         self._condition = threading.Condition()
         self._requested = 0  # number of the latest request; a render whose number differs stops

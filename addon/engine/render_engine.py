@@ -1,5 +1,5 @@
 """The "Spectral Volume" render engine: F12, bpy.ops.render.render and animation renders, material,
-light and World previews (thumbnails, addon/preview.py), and the Rendered viewport.
+light and World previews (thumbnails, addon/engine/thumbnails.py), and the Rendered viewport.
 
 Each frame is exported from the render depsgraph and rendered, here or on the Dask farm of the Render
 settings' scheduler address, in passes of doubling sample counts cut into units of about a quarter of
@@ -8,10 +8,10 @@ is honoured. The Render Result's Combined pass (linear Rec.709) is updated as of
 at the end the XYZ and XYZ Variance passes, which the compositor and multilayer EXR output see, are
 written too, and with Denoise on, Combined is replaced by the denoised image (addon/tracer/denoise.py;
 the updates during the render stay raw). While the kernel compiles (the first render), the stats line
-says so. The render is a render job (addon/jobs.py) and its film goes to the Render Result through
+says so. The render is a render job (addon/jobs/) and its film goes to the Render Result through
 addon/output.py. Bad input is reported as an error and renders nothing, so Blender writes no output
 file. A renderer that cannot run inside a render engine's render (the Cycles emulation: Blender crashes)
-is refused with an error (its job kind's `engine_refusal`). While `render_export` asks for an export
+is refused with an error (its job kind's `engine_refusal`). While `export.rendered` asks for an export
 (Render to Image, Export Scene, the CLI), a render exports its depsgraph for it and renders nothing. A
 preview renders Blender's preview scene as a render does, lit as `preview_scene` says, and reports nothing.
 
@@ -20,13 +20,13 @@ renders stay visible: camera, lights, volume file and grids, mesh data, output a
 fluid smoke and fire, force fields and rigid bodies, particles (they instance volumes), animation and
 custom properties. Those for what it does not render are left out (`NOT_RENDERED`): cloth, soft bodies,
 dynamic paint, liquids, legacy textures, Freestyle, Grease Pencil, light probes, stereoscopy. The
-viewport's Material Preview uses EEVEE, with each spectral material's preview nodes (`material_preview`).
+viewport's Material Preview uses EEVEE, with each spectral material's preview nodes (`addon/eevee_stand_in.py`).
 
 The Rendered viewport: `view_update` (Blender changed the scene) exports it through the view's camera (built
 from the 3D view's matrices, `region_camera`) at the Viewport Samples (denoised with Viewport Denoise on)
-and hands it to the engine's `ViewportRenderer` (addon/viewport_render.py), which restarts its background
+and hands it to the engine's `ViewportRenderer` (addon/engine/viewport_render.py), which restarts its background
 render; `view_draw` restarts it when the view moved or was resized, draws the latest image through the
-scene's colour management (`bind_display_space_shader`, addon/viewport_draw.py) and, while a render is in
+scene's colour management (`bind_display_space_shader`, addon/engine/viewport_draw.py) and, while a render is in
 flight, asks for the next redraw (`tag_redraw`, as Blender's own engine template does; no timers). Bad input
 stops the render and its message shows in the viewport's stats line.
 """
@@ -36,14 +36,16 @@ import dataclasses
 import bpy
 import gpu
 
-from . import jobs, output, render_export
-from .export.scene import export_scene
-from .preview import preview_scene
-from .props.render import ENGINE_ID
-from .tracer.denoise import available as denoise_available, denoised_rgb
-from .tracer.errors import SpectralError
-from .tracer.image_io import PASSES
-from .tracer.progress import Throttle, TimeLeft
+from .. import output
+from ..export import rendered
+from ..jobs import kinds
+from ..export.scene import export_scene
+from .thumbnails import preview_scene
+from ..props.render import ENGINE_ID
+from ..tracer.denoise import available as denoise_available, denoised_rgb
+from ..tracer.errors import SpectralError
+from ..tracer.image_io import PASSES
+from ..tracer.progress import Throttle, TimeLeft
 from .viewport_draw import ViewportImage
 from .viewport_render import ViewportRenderer, view_camera
 
@@ -64,11 +66,11 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             self.register_pass(scene, renderlayer, name, len(channels), channels, "COLOR")
 
     def render(self, depsgraph):
-        if render_export.capture(depsgraph):  # Render to Image, Export Scene, the CLI: export only
+        if rendered.capture(depsgraph):  # Render to Image, Export Scene, the CLI: export only
             return
         original = depsgraph.scene.original
         settings = original.spectral
-        refusal = jobs.kind(settings).engine_refusal
+        refusal = kinds.kind(settings).engine_refusal
         if refusal is not None:
             self.report({"ERROR"}, refusal)
             return
@@ -79,7 +81,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             return
         if self.is_preview:
             export = dataclasses.replace(export, scene=preview_scene(export.scene, settings.preview_samples))
-        job = jobs.render_job(original, export)
+        job = kinds.render_job(original, export)
         for warning in job.warnings:
             self._report_unless_preview({"WARNING"}, warning)
         scene = export.scene
@@ -127,7 +129,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
             self.viewport_notes = []
             viewport.fail(str(problem))
             return
-        note = jobs.kind(settings).viewport_note
+        note = kinds.kind(settings).viewport_note
         self.viewport_notes = export.warnings + ([] if note is None else [note])
         scene = export.scene
         scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spp=settings.preview_samples,

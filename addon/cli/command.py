@@ -5,7 +5,7 @@
     blender -c spectral_render FILE.blend --out OUT.exr [...]   (the same, with the extension installed)
 
 Each frame is exported as F12 renders it and rendered by the render job its Render settings choose (the
-tracer or the Cycles emulation, addon/jobs.py); its film goes to files through addon/output.py.
+tracer or the Cycles emulation, addon/jobs/); its film goes to files through addon/output.py.
 Output paths take `#` frame-number placeholders (`out/frame_####.exr`), needed when rendering several
 frames. Every option is checked before the file is opened; each frame's files are written together
 (`image_io.write_all`) when that frame is done, so a failure at a later frame keeps the earlier ones.
@@ -20,10 +20,10 @@ import sys
 from pathlib import Path
 
 from .frame_options import check_frame_paths, frame_path, parse_frames, parse_resolution
-from .tracer import checks, image_io
-from .tracer.cli import EXIT_OK, ProgressBar, run_reporting, say
-from .tracer.errors import SpectralError
-from .tracer.scene import SPP_MAX
+from ..tracer import checks, image_io
+from ..tracer.cli import EXIT_OK, ProgressBar, run_reporting, say
+from ..tracer.errors import SpectralError
+from ..tracer.scene import SPP_MAX
 
 COMMAND = "spectral_render"
 CLASSES = ()
@@ -77,7 +77,7 @@ def export_context_scene(frame: int | None = None):
     """Export the context's scene (at `frame`, default its current frame) to a tracer scene, as F12 renders it."""
     import bpy
 
-    from .render_export import export_rendered
+    from ..export.rendered import export_rendered
 
     if frame is not None:
         check_frame(frame)
@@ -148,11 +148,12 @@ def render_blend(args, written: list):
 def _render_frame(scene, frame: int, args, written: list) -> str:
     import bpy
 
-    from . import jobs, output
+    from .. import output
+    from ..jobs.kinds import render_job
 
     export = export_context_scene(frame)
     region = output.placement(scene)
-    job = jobs.render_job(scene, export, spp=args.spp, scheduler=args.scheduler)
+    job = render_job(scene, export, spp=args.spp, scheduler=args.scheduler)
     bar = None if args.quiet else ProgressBar()
     result = job.run(progress=bar, notice=bar and bar.notice)
     if job.error is not None:
@@ -207,17 +208,14 @@ def unregister_extras():
     _handle = None
 
 
-def _module_main(argv) -> int:
+def module_main(argv) -> int:
     """`python -m addon.cli render ...`: registers the add-on in this bpy module first."""
     if not argv or argv[0] != "render":
         print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N | --frames LIST] "
               "[--resolution WxH] [--percentage N] [--png OUT.png] [--spp N]", file=sys.stderr)
         return 2
-    from . import register
+    from .. import register
 
     register()
     return main(argv[1:])
 
-
-if __name__ == "__main__":
-    raise SystemExit(_module_main(sys.argv[1:]))

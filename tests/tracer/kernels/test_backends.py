@@ -196,7 +196,7 @@ def render_film(scene, backend, seed, spp=SPP) -> Film:
 # Renders every scene's NumPy film (seed 2) in the child process and pickles them.
 NUMPY_FILMS = """
 import pickle, sys
-from tests.tracer.test_backends import SCENES, render_film
+from tests.tracer.kernels.test_backends import SCENES, render_film
 films = {name: render_film(build(), "numpy", 2) for name, build in SCENES.items()}
 with open(sys.argv[1], "wb") as file:
     pickle.dump(films, file)

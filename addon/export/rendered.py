@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from .export.scene import Export, export_scene
-from .props.render import ENGINE_ID
-from .tracer.errors import SpectralError
+from .scene import Export, export_scene
+from ..props.render import ENGINE_ID
+from ..tracer.errors import SpectralError
 
 
 @dataclass

@@ -12,8 +12,8 @@ import dataclasses
 
 import numpy as np
 
-from .tracer import spectra
-from .tracer.scene import Light, Scene
+from ..tracer import spectra
+from ..tracer.scene import Light, Scene
 
 KEY_LIGHT_STRENGTH = 3.0  # luminance of the key sun's irradiance; the preview World's radiance is 1
 KEY_LIGHT_FROM = (-0.5, 0.7, 0.6)  # towards the key sun, in the camera's (right, up, back) axes

@@ -1,11 +1,11 @@
 """Material previews: Blender renders its preview scene with the engine (`ID.asset_generate_preview()`
-does so headless), lit by its own lights, or by the key light of `addon.preview` where it has none."""
+does so headless), lit by its own lights, or by the key light of `addon.engine.thumbnails` where it has none."""
 
 import numpy as np
 import pytest
 
-from addon import dispatch
-from addon.preview import preview_scene
+from addon.jobs import tracer_job
+from addon.engine.thumbnails import preview_scene
 from addon.tracer.scene import Camera, look_at
 from tests.support import scenes
 
@@ -29,13 +29,13 @@ def test_a_material_preview_renders_the_spectral_material(registered, monkeypatc
     scene = bpy.context.scene
     scene.render.engine = "SPECTRAL_VOLUME"
     rendered = []
-    real_run = dispatch.run
+    real_run = tracer_job.render_tracer
 
     def run(tracer_scene, *args, **options):
         rendered.append(tracer_scene)
         return real_run(tracer_scene, *args, **options)
 
-    monkeypatch.setattr(dispatch, "run", run)
+    monkeypatch.setattr(tracer_job, "render_tracer", run)
     centres, corners = [], []
     for albedo in (0.2, 0.95):
         material = bpy.data.materials.new(f"Ink {albedo}")
