@@ -74,15 +74,6 @@ def isotropic_pdf(cos_theta):
 
 
 @shared
-def isotropic_sample(u1, u2):
-    """Uniform direction on the unit sphere (pdf 1/(4π)): z = 1 − 2u1, azimuth 2πu2; returns (x, y, z)."""
-    z = 1.0 - 2.0 * u1
-    r = 2.0 * np.sqrt(u1 * (1.0 - u1))  # √(1 − z²) without cancellation at the poles
-    phi = 2.0 * np.pi * u2
-    return r * np.cos(phi), r * np.sin(phi), z
-
-
-@shared
 def orthonormal_basis(n):
     """Two unit vectors (t, b) with (t, b, n) a right-handed orthonormal frame, for unit `n`.
 

@@ -129,15 +129,6 @@ def test_sampled_directions_follow_hg_around_wi(wi):
     assert azimuth_cos_test(wo, -wi, lambda c: phase.hg_pdf(0.5, c)) < 1e-30  # g > 0 is forward, not backward
 
 
-def test_isotropic_directions_are_uniform():
-    rng = np.random.default_rng(17)
-    wo = np.array(phase.isotropic_sample(rng.random(N), rng.random(N)))
-    assert np.allclose(np.linalg.norm(wo, axis=0), 1.0, atol=1e-14)
-    for axis in np.eye(3):
-        assert azimuth_cos_test(wo, axis, phase.isotropic_pdf) > P_MIN
-    assert azimuth_cos_test(wo, np.eye(3)[2], phase.rayleigh_pdf) < 1e-30
-
-
 def test_numba_and_numpy_forms_agree():
     rng = np.random.default_rng(18)
     u = np.concatenate((rng.random(300), [0.0, 0.5, 1.0 - 2.0**-53]))
@@ -160,11 +151,8 @@ def test_numba_and_numpy_forms_agree():
         assert np.array_equal(np.array(basis_jit(wi[:, k])), basis[:, :, k])
     # cbrt, cos and sin: identical where NumPy uses the C library, as Numba does; on AVX-512 machines NumPy
     # may use its own SIMD versions (SVML), which can differ in the last bit, hence a tolerance of a few ulp.
-    rayleigh_jit, isotropic_jit, direction_jit = (jit(f) for f in (
-        phase.rayleigh_sample_cos, phase.isotropic_sample, phase.sample_direction))
+    rayleigh_jit, direction_jit = (jit(f) for f in (phase.rayleigh_sample_cos, phase.sample_direction))
     assert np.allclose(phase.rayleigh_sample_cos(u), [rayleigh_jit(x) for x in u], rtol=0, atol=1e-15)
-    iso = np.array(phase.isotropic_sample(u, u2))
-    assert np.allclose(iso, np.array([isotropic_jit(a, b) for a, b in zip(u, u2)]).T, rtol=0, atol=1e-15)
     wo = np.array(phase.sample_direction(wi, cos, u2))
     wo_jit = np.array([direction_jit(wi[:, k], cos[k], u2[k]) for k in range(u.size)]).T
     assert np.allclose(wo, wo_jit, rtol=0, atol=1e-15)
