@@ -64,6 +64,22 @@ def box_mesh(name: str, low, high):
     return mesh
 
 
+def add_diffuse_surface(collection, surface, rgb):
+    """A mesh object of the tracer surface's triangles (in world space) with a Diffuse BSDF of Color `rgb`
+    (linear), as an artist makes a ground plane."""
+    mesh = bpy.data.meshes.new(surface.name)
+    mesh.from_pydata([tuple(v) for v in surface.vertices], [], [tuple(t) for t in surface.triangles])
+    mesh.update()
+    material = bpy.data.materials.new(surface.name)
+    nodes = material.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (*rgb, 1.0)
+    material.node_tree.links.new(diffuse.outputs["BSDF"], nodes["Material Output"].inputs["Surface"])
+    mesh.materials.append(material)
+    return parts.link(collection, bpy.data.objects.new(surface.name, mesh))
+
+
 def add_mesh_volume(collection, name: str, low, high, voxel_size: float, material):
     """A box mesh filled with the volume material, voxelised by the add-on at `voxel_size`."""
     obj = parts.link(collection, bpy.data.objects.new(name, box_mesh(name, low, high)))

@@ -12,8 +12,9 @@ Blender scene exports to the same tracer scene that `scenes` builds in code. Wri
   cubes), "Designed D65", "Designed A" (a pair designed with colour-science), each a cube pair
   collection with a light collection and World;
 - `fire.blend`: fire and smoke domains reading one fluid cache (never simulated);
+- `cloud_shadow.blend`: a cloud over a ground plane (a mesh with a Diffuse BSDF), its shadow on it;
 - `volumes/`: the VDB files they read (`//volumes/...`): the air and ground, the frog, the inks, the fire's
-  cache `fire_cache/data/fluid_data_0001.vdb`.
+  cache `fire_cache/data/fluid_data_0001.vdb`, the cloud.
 Rebuilding writes the same content in different bytes (Blender and OpenVDB stamp their files), so
 tests/demos/test_blends.py compares the exported scenes, not the files.
 """
@@ -58,6 +59,7 @@ DEMO_SCENES = {
     "metamers_simple_lower_half": DemoScene("metamerism.blend", "Simple D65 lower half", 24, 0.5),
     "metamers_d65": DemoScene("metamerism.blend", "Designed D65", 24, 1.0),
     "metamers_a": DemoScene("metamerism.blend", "Designed A", 24, 1.0),
+    "cloud_shadow": DemoScene("cloud_shadow.blend", "Cloud", 32),
 }
 
 
@@ -188,6 +190,20 @@ def build_fire(out: Path) -> list:
     return [scene]
 
 
+def build_cloud_shadow(out: Path) -> list:
+    tracer = scenes.cloud_shadow(WIDTH, HEIGHT, 1)
+    scene = _scene("cloud_shadow")
+    collection = scene.collection
+    parts.add_camera(scene, tracer.camera)
+    sun, sky = tracer.lights
+    d65 = lambda settings: demo_parts.set_preset(settings, "D65")
+    parts.add_sun(collection, sun, d65)
+    scene.world = parts.new_world("Sky", sky, d65)
+    _volumes(collection, tracer.media, _vdb(out, "cloud.vdb", {m.name: m.density for m in tracer.media}))
+    demo_parts.add_diffuse_surface(collection, tracer.surfaces[0], scenes.GROUND_RGB)
+    return [scene]
+
+
 # ----------------------------------------------------------------------------- writing
 
 
@@ -214,7 +230,8 @@ def write_blend(path: Path, build) -> None:
 
 
 BUILDERS = {"rayleigh": build_rayleigh, "fluorescent_frog": build_frog, "highlighter_ink": build_highlighter_ink,
-            "metamerism": lambda _out: build_metamerism(designed_pair()), "fire": build_fire}
+            "metamerism": lambda _out: build_metamerism(designed_pair()), "fire": build_fire,
+            "cloud_shadow": build_cloud_shadow}
 
 
 def build(out: Path = HERE, only=None, log=print) -> list[Path]:

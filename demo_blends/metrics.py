@@ -9,6 +9,8 @@ Colour vocabulary: chromaticity (x, y); CIE LCh hue angle h (degrees, CIELAB aga
 (colorimetry.dominant_wavelength; a negative value is minus the complementary wavelength of a purple).
 """
 
+import warnings
+
 import numpy as np
 
 from addon.tracer import colorimetry
@@ -76,25 +78,31 @@ def face_mask(camera: Camera, centre, edge: float, inset: float = 0.2) -> np.nda
 
 def column_density(camera: Camera, grid: Grid, steps: int = 256) -> np.ndarray:
     """∫ density ds along each pixel's ray through the grid's box (trilinear, as the tracer reads it)."""
+    return ray_column_density(*pixel_rays(camera), grid, steps)
+
+
+def ray_column_density(origins: np.ndarray, rays: np.ndarray, grid: Grid, steps: int = 256) -> np.ndarray:
+    """∫ density ds along rays (origins and unit directions, (..., 3) each) through the grid's box, from each
+    origin on (trilinear, as the tracer reads it; NaN origins give NaN)."""
     from scipy.ndimage import map_coordinates
 
-    origins, rays = pixel_rays(camera)
     shape = np.array(grid.values.shape)
     corners = np.array([grid.index_to_world @ np.append(np.where(c, shape, -1.0), 1.0) for c in np.ndindex(2, 2, 2)])
     lo, hi = corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # NaN origins: all-NaN slices
         t0 = np.nanmax(np.minimum((lo - origins) / rays, (hi - origins) / rays), axis=-1)
         t1 = np.nanmin(np.maximum((lo - origins) / rays, (hi - origins) / rays), axis=-1)
     t0, t1 = np.maximum(t0, 0.0), np.maximum(t1, np.maximum(t0, 0.0))
     world_to_index = np.linalg.inv(grid.index_to_world)
-    total = np.zeros(rays.shape[:2])
+    total = np.zeros(rays.shape[:-1])
     padded = np.pad(grid.values, 1)
     for k in range(steps):
         t = t0 + (k + 0.5) / steps * (t1 - t0)
-        points = origins + t[..., None] * rays
+        points = np.nan_to_num(origins + t[..., None] * rays, nan=-1e30)
         index = points @ world_to_index[:3, :3].T + world_to_index[:3, 3] + 1.0
         total += map_coordinates(padded, index.reshape(-1, 3).T, order=1, mode="constant").reshape(t.shape)
-    return total * (t1 - t0) / steps
+    return np.where(np.isnan(origins).any(axis=-1), np.nan, total * (t1 - t0) / steps)
 
 
 def medium(scene, name: str):
@@ -296,3 +304,39 @@ def fire(scene, xyz: np.ndarray) -> dict:
     return {"pixels": int(bright.sum()), "cct_min": float(cct.min()), "cct_max": float(cct.max()),
             "cct_p5": float(np.percentile(cct, 5)), "cct_median": float(np.median(cct)),
             "cct_p95": float(np.percentile(cct, 95)), "duv_max": float(np.abs(duv).max())}
+
+
+def cloud_shadow(scene, xyz: np.ndarray, lit_depth: float = 0.01, shadow_depth: float = 3.0) -> dict:
+    """The cloud's shadow on the ground: the mean colour of the ground where the sun's light crosses an
+    optical depth above `shadow_depth` of cloud (shadow) and below `lit_depth` (lit), each seen by the camera
+    through less than `lit_depth` of cloud; their luminance ratio is the shadow's contrast."""
+    cloud, light = medium(scene, "cloud"), sun(scene)
+    (ground,) = scene.surfaces
+    half = np.abs(ground.vertices[:, :2]).max()
+    points = plane_hits(scene.camera, 2, 0.0)
+    with np.errstate(invalid="ignore"):
+        on_ground = (np.abs(points[..., 0]) < half) & (np.abs(points[..., 1]) < half)
+    towards_sun = np.broadcast_to(light.direction / np.linalg.norm(light.direction), points.shape)
+    to_sun = cloud.density_scale * ray_column_density(np.where(on_ground[..., None], points, np.nan), towards_sun,
+                                                     cloud.density)
+    seen = cloud.density_scale * column_density(scene.camera, cloud.density)
+    with np.errstate(invalid="ignore"):
+        clear = on_ground & (seen < lit_depth)
+        shadow, lit = clear & (to_sun > shadow_depth), clear & (to_sun < lit_depth)
+    white = light_xyz(light)
+    shadow_xyz, lit_xyz = region_xyz(xyz, shadow), region_xyz(xyz, lit)
+    return {"shadow": describe(shadow_xyz, white), "lit ground": describe(lit_xyz, white),
+            "contrast": float(lit_xyz[1] / shadow_xyz[1]), "shadow_pixels": int(shadow.sum()),
+            "lit_pixels": int(lit.sum()), "lit_closed_form_Y": lit_ground_luminance(scene, ground)}
+
+
+def lit_ground_luminance(scene, ground) -> float:
+    """Closed form of a Lambertian ground's luminance under the scene's sun and its uniform sky, unshadowed
+    (the cloud's small share of the sky left out): ρ (E cos θ + π L) / π, with ρ the reflectance weighted by the
+    lights' spectrum (sun and sky share one) and E, L their luminous irradiance and radiance."""
+    light = sun(scene)
+    (sky,) = [candidate for candidate in scene.lights if candidate.kind == "environment"]
+    spectrum = light.spectrum.values * strength_scale(light)
+    reflected = colorimetry.spectrum_to_xyz(spectrum * ground.reflectance.values)[1] / colorimetry.spectrum_to_xyz(spectrum)[1]
+    cos_theta = light.direction[2] / np.linalg.norm(light.direction)
+    return float(reflected * (light.strength * cos_theta + np.pi * sky.strength) / np.pi)

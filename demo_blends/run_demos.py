@@ -89,6 +89,12 @@ def _fire_lines(f: dict) -> list[str]:
             f"{scenes.FIRE_TEMPERATURES[0]:.0f}–{scenes.FIRE_TEMPERATURES[1]:.0f} K"]
 
 
+def _shadow_lines(f: dict) -> list[str]:
+    return [f"shadow contrast {f['contrast']:.1f}:1 on the ground; lit ground Y {f['lit ground']['Y']:.4f}, closed form "
+            f"{f['lit_closed_form_Y']:.4f}"] + [
+        metrics.format_colour(name, f[name]) for name in ("lit ground", "shadow")]
+
+
 def _cubes(scene, xyz) -> dict:
     """ΔE00 between the cubes against the white of an albedo-1 cube in this very scene."""
     white, _ = metamers.face_response(scene, 1.0)
@@ -105,6 +111,7 @@ DEMOS = [
     Demo("metamers_simple_lower_half", "Report's cubes, D65 below 570 nm", _cubes, _cube_lines),
     Demo("metamers_d65", "Designed metamers under D65", _cubes, _cube_lines),
     Demo("metamers_a", "Designed metamers under A", _cubes, _cube_lines),
+    Demo("cloud_shadow", "A cloud's shadow on a ground plane", metrics.cloud_shadow, _shadow_lines),
 ]
 
 

@@ -12,9 +12,10 @@ towards +x.
 import numpy as np
 
 from addon.tracer import spectra
+from addon.tracer.procedural import cloud_grid
 from addon.tracer.builders import (cell_centres, direction, environment, medium, perspective, sampled_grid, scene,
                                    smooth_step, sun)
-from addon.tracer.scene import BlackbodyEmission, Camera, Fluorescence, Grid, Medium, Scene, look_at
+from addon.tracer.scene import BlackbodyEmission, Camera, Fluorescence, Grid, Medium, Scene, Surface, look_at
 from addon.tracer.wavelengths import GRID
 
 SEED = 1  # every demo renders with this seed: the same image on every run
@@ -381,3 +382,41 @@ def fire(width: int, height: int, spp: int) -> Scene:
     moon = sun(direction(45.0, 150.0), 1.0, spectrum=spectra.blackbody(MOON_TEMPERATURE), name="moon")
     cam = perspective((0.0, -4.6, 1.0), (0.0, 0.0, 1.0), width, height, 48.0)
     return scene(cam, (flame, plume), (moon,), spp=spp, seed=SEED)
+
+
+# ----------------------------------------------------------------------------- a cloud over a ground plane
+
+# A cumulus-like cloud (the procedural cloud, grey, forward scattering) floating over a grassy ground plane
+# under a sun and a sky: the ground is a surface (a Diffuse BSDF in the .blend), the cloud casts its shadow
+# on it, and the film is transparent where the camera sees the sky, so the render composites over a plate.
+CLOUD_CENTRE = (0.0, 0.0, 1.5)
+CLOUD_SIZE = 2.2  # the cloud's cube, world units
+CLOUD_CELLS = 48
+CLOUD_SEED = 3
+CLOUD_DENSITY = 16.0  # σ_t per unit of the grid's density (its values are in [0, 1])
+GROUND_RGB = (0.20, 0.32, 0.10)  # linear Rec.709 Base Color of the grass
+GROUND_HALF = 8.0
+SHADOW_SUN = (45.0, 60.0)  # elevation, azimuth: in front and to the right, so the shadow falls towards the camera
+SHADOW_SKY_STRENGTH = 0.2  # the sky's radiance Y against the sun's irradiance Y of 1
+
+
+def cloud_medium() -> Medium:
+    grid = cloud_grid(CLOUD_CELLS, CLOUD_SIZE, CLOUD_CENTRE, seed=CLOUD_SEED)
+    return medium(grid, CLOUD_DENSITY, name="cloud", albedo=0.97, g=0.6)
+
+
+def ground_plane() -> Surface:
+    """A square at z = 0, GROUND_HALF either side of the origin, its reflectance the smooth spectrum of
+    GROUND_RGB (as the exporter turns a Base Color into one)."""
+    h = GROUND_HALF
+    vertices = np.array([[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]])
+    return Surface(name="ground", vertices=vertices, triangles=np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32),
+                   reflectance=spectra.scaled_from_rgb(np.array(GROUND_RGB)))
+
+
+def cloud_shadow(width: int, height: int, spp: int) -> Scene:
+    """The cloud, its shadow on the ground, the sky seen past them; D65 sun and sky."""
+    cam = perspective((0.0, -7.0, 2.0), (0.0, 0.0, 1.0), width, height, 45.0)
+    light = sun(direction(*SHADOW_SUN), 1.0, spectrum=LIGHTS["D65"], name="sun")
+    sky = environment(SHADOW_SKY_STRENGTH, spectrum=LIGHTS["D65"], name="sky")
+    return scene(cam, (cloud_medium(),), (light, sky), (ground_plane(),), spp=spp, seed=SEED)

@@ -23,6 +23,7 @@ REFERENCES = {
     "fluorescent_frog": scenes.fluorescent_frog,
     "highlighter_ink": scenes.highlighter_ink,
     "fire": scenes.fire,
+    "cloud_shadow": scenes.cloud_shadow,
     "metamers_simple_d65": scenes.metamerism_simple("D65"),
     "metamers_simple_lower_half": scenes.metamerism_simple("D65 lower half"),
 }

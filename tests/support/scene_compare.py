@@ -49,7 +49,7 @@ def assert_same_scene(exported, reference, curve: bool, renamed=None, albedo_tol
     """`exported` equals `reference`: camera, settings, lights (spectra as shapes, up to the curve table
     when `light_curves`) and media, whose names in `exported` map to `reference`'s through `renamed`
     (default: the same names); the albedo of a medium named in `albedo_tolerances` within that tolerance
-    (per wavelength)."""
+    (per wavelength); surfaces (triangles, reflectance and emission, matched by name)."""
     renamed, albedo_tolerances = renamed or {}, albedo_tolerances or {}
     cam_a, cam_b = exported.camera, reference.camera
     assert (cam_a.width, cam_a.height, cam_a.kind) == (cam_b.width, cam_b.height, cam_b.kind)
@@ -103,3 +103,12 @@ def assert_same_scene(exported, reference, curve: bool, renamed=None, albedo_tol
             assert (ea.intensity, ea.temperature_scale, ea.temperature_offset) == pytest.approx(
                 (eb.intensity, eb.temperature_scale, eb.temperature_offset))
             assert_same_grid(ea.temperature, eb.temperature, f"{a.name} temperature")
+    surfaces_b = {surface.name: surface for surface in reference.surfaces}
+    assert sorted(surface.name for surface in exported.surfaces) == sorted(surfaces_b)
+    for a in exported.surfaces:
+        b = surfaces_b[a.name]
+        np.testing.assert_allclose(a.vertices[a.triangles], b.vertices[b.triangles], atol=1e-5, err_msg=a.name)
+        np.testing.assert_allclose(a.reflectance.values, b.reflectance.values, atol=1e-6, err_msg=a.name)
+        assert (a.emission is None) == (b.emission is None), a.name
+        if b.emission is not None:
+            np.testing.assert_allclose(a.emission.values, b.emission.values, rtol=1e-6, err_msg=a.name)
