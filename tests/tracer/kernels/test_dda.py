@@ -1,4 +1,6 @@
-"""The majorant grid's DDA (`kernels.dda`) and the `select` it chooses with.
+"""The majorant grid's DDA (`kernels.dda`) and the `select` it chooses with: a reference walk by the shared
+per-axis arithmetic, checked against brute-force sampling, then each backend's own tracker state machine
+against that walk.
 
 The walk must visit exactly the blocks that the ray passes through, in order, with the boundaries where
 the ray leaves each: free flights and shadow rays take each block's majorant (and minorant) only between
@@ -88,3 +90,78 @@ def test_select_gives_scalars_in_kernels_and_arrays_in_numpy():
     assert kernel(2.0) == 4.0 and kernel(-3.0) == -1.0
     assert isinstance(kernel(2.0), float)  # np.where would give a 0-d array: an allocation per call
     np.testing.assert_array_equal(select(np.array([1.0, -1.0]) > 0.0, 5.0, np.array([7.0, 8.0])), [5.0, 8.0])
+
+
+# ----------------------------------------------------------------------------- the backends' own state machines
+
+def backend_walks():
+    """Each backend's DDA state machine (`_tracker_start`, `_tracker_boundary`, `_tracker_advance` of the
+    Numba kernel, inlined into a small jitted loop, and of the NumPy backend) walking one medium's majorant
+    blocks along a world ray: [(block, t where the ray leaves it)]."""
+    from addon.tracer.kernels import numba_backend as nb
+    from addon.tracer.kernels import numpy_backend as npb
+
+    @nb.jit  # the kernel's options (NumPy's error model: a ray parallel to a face divides by zero)
+    def numba_walk(ks, origin, direction, cells, leaves):
+        tracker = nb._new_tracker(1)
+        nb._tracker_start(ks, origin[0], origin[1], origin[2], direction[0], direction[1], direction[2], 0.0,
+                          np.inf, tracker)
+        count = 0
+        while tracker.state_i[0, nb.PHASE] != nb.DONE:
+            t_end = nb._tracker_boundary(tracker, 0)
+            if tracker.state_i[0, nb.PHASE] == nb.INSIDE:
+                for axis in range(3):
+                    cells[count, axis] = tracker.state_i[0, nb.CELL + axis]
+                leaves[count] = t_end
+                count += 1
+            nb._tracker_advance(ks, tracker, t_end)
+        return count
+
+    def numba(ks, origin, direction):
+        cells, leaves = np.zeros((512, 3), dtype=np.int64), np.zeros(512)
+        count = numba_walk(ks, origin, direction, cells, leaves)
+        return [(tuple(int(c) for c in cells[k]), float(leaves[k])) for k in range(count)]
+
+    @np.errstate(divide="ignore", invalid="ignore")  # as in the backend: a parallel axis divides by zero
+    def numpy(ks, origin, direction):
+        tracker = npb._tracker_start(ks, origin[None, :], direction[None, :], np.inf)
+        visited, moving = [], np.ones(1, dtype=bool)
+        while tracker.phase[0, 0] != 2:
+            t_end = npb._tracker_boundary(tracker)[:, 0]
+            if tracker.phase[0, 0] == 1:
+                visited.append((tuple(int(c) for c in tracker.cell[0, 0]), float(t_end[0])))
+            npb._tracker_advance(ks, tracker, moving, t_end)
+        return visited
+
+    return {"numba": numba, "numpy": numpy}
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_each_backends_tracker_walks_the_blocks_the_reference_walk_does(backend):
+    """Random world rays through a medium's majorant blocks (in and out of the grid, some parallel to a
+    face): the backend's state machine visits the blocks `walk` visits, leaving each where it does (`walk`
+    itself is checked against brute-force sampling above)."""
+    from addon.tracer.builders import medium, sampled_grid
+    from addon.tracer.lowering import compile_scene
+    from tests.support import scenes as s
+
+    grid = sampled_grid(lambda x, y, z: 1.0 + 0.5 * np.sin(3.0 * x) * np.cos(2.0 * y) + 0.2 * z, (37, 29, 23),
+                        (-1.0, -0.7, -0.4), (1.2, 0.9, 0.6))
+    ks = compile_scene(s.scene(s.perspective_camera(), [medium(grid, 2.0)], [s.environment()]))
+    walk_of = backend_walks()[backend]
+    w2p, block, cells = ks.density.world_to_padded[0], int(ks.majorant.block[0]), ks.majorant.shape[0]
+    assert np.prod(cells) > 8  # several blocks to walk through
+    rng = np.random.default_rng(3)
+    for _ in range(60):
+        origin = rng.uniform((-2.0, -2.0, -2.0), (2.0, 2.0, 2.0))
+        direction = rng.normal(size=3)
+        if rng.random() < 0.2:
+            direction[rng.integers(3)] = 0.0
+        direction /= np.linalg.norm(direction)
+        visited = walk_of(ks, origin, direction)
+        # The reference walks the same ray in the medium's padded index space, where the blocks are a grid.
+        index_origin = w2p[:3, :3] @ origin + w2p[:3, 3]
+        index_direction = w2p[:3, :3] @ direction
+        expected = walk(index_origin, index_direction, block, cells)
+        assert [cell for cell, _ in visited] == [cell for cell, _ in expected]
+        np.testing.assert_allclose([t for _, t in visited], [t for _, t in expected], rtol=1e-12, atol=1e-12)
