@@ -128,3 +128,47 @@ def unit(vectors: np.ndarray, axis: int = -1) -> np.ndarray:
 def unit_vector(value, where: str) -> np.ndarray:
     """A direction (see `direction`) normalised to length 1."""
     return unit(direction(value, where))
+
+
+def affine_matrix(value, what: str) -> np.ndarray:
+    """`value` as a 4×4 float64 affine matrix (row-major, acting on column vectors), or a SpectralError."""
+    try:
+        matrix = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got {shown(value)}") from None
+    if matrix.shape != (4, 4):
+        raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got shape {matrix.shape}")
+    if not np.all(np.isfinite(matrix)):
+        raise SpectralError(f"{what}: the matrix contains NaN or infinite numbers")
+    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-9):
+        raise SpectralError(
+            f"{what}: the bottom row must be [0, 0, 0, 1], found {matrix[3].tolist()} "
+            "(matrices are row-major and act on column vectors: is it transposed?)"
+        )
+    matrix[3] = [0.0, 0.0, 0.0, 1.0]
+    # Scale-free test: |det| against the product of the column lengths (1 for a rotation of any scale).
+    linear = matrix[:3, :3]
+    if abs(np.linalg.det(linear)) <= 1e-9 * np.prod(np.linalg.norm(linear, axis=0)):
+        raise SpectralError(f"{what}: the matrix is singular (a zero scale, or two axes in one direction?)")
+    return matrix
+
+
+def grid_values(values: np.ndarray, where: str, nonnegative: bool) -> None:
+    """A grid's values: a 3-D array, not empty, finite, and non-negative where `nonnegative`."""
+    if values.ndim != 3:
+        raise SpectralError(f"{where} must be a 3-D array indexed [x, y, z], found shape {values.shape}")
+    if values.size == 0:
+        raise SpectralError(f"{where} is empty (shape {values.shape})")
+    bad = ~np.isfinite(values)
+    if bad.any():
+        raise SpectralError(f"{where} has {int(bad.sum())} NaN or infinite values, first at index {_first_index(bad)}")
+    negative = values < 0
+    if nonnegative and negative.any():
+        raise SpectralError(
+            f"{where} has {int(negative.sum())} negative values (min {values.min():g}), "
+            f"first at index {_first_index(negative)}"
+        )
+
+
+def _first_index(mask: np.ndarray) -> tuple:
+    return tuple(int(i) for i in np.argwhere(mask)[0])

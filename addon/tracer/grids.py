@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checks import byte_size, shown
+from .checks import affine_matrix, byte_size, grid_values
 from .errors import SpectralError
 from .files import GRID_LIMIT, regular_file
 from .scene import Grid
@@ -38,29 +38,6 @@ def available_memory() -> int | None:
     return int(psutil.virtual_memory().available)
 
 
-def affine_matrix(value, what: str) -> np.ndarray:
-    """`value` as a 4×4 float64 affine matrix (row-major, acting on column vectors), or a SpectralError."""
-    try:
-        matrix = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError, RecursionError):
-        raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got {shown(value)}") from None
-    if matrix.shape != (4, 4):
-        raise SpectralError(f"{what}: a matrix is 4 lists of 4 numbers, got shape {matrix.shape}")
-    if not np.all(np.isfinite(matrix)):
-        raise SpectralError(f"{what}: the matrix contains NaN or infinite numbers")
-    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0], rtol=0.0, atol=1e-9):
-        raise SpectralError(
-            f"{what}: the bottom row must be [0, 0, 0, 1], found {matrix[3].tolist()} "
-            "(matrices are row-major and act on column vectors: is it transposed?)"
-        )
-    matrix[3] = [0.0, 0.0, 0.0, 1.0]
-    # Scale-free test: |det| against the product of the column lengths (1 for a rotation of any scale).
-    linear = matrix[:3, :3]
-    if abs(np.linalg.det(linear)) <= 1e-9 * np.prod(np.linalg.norm(linear, axis=0)):
-        raise SpectralError(f"{what}: the matrix is singular (a zero scale, or two axes in one direction?)")
-    return matrix
-
-
 def load_grid(path, grid_name: str | None = None, index_to_world=None, *, nonnegative: bool = True) -> Grid:
     """Read a grid from `.npy` or `.vdb`, checked: 3-D, not empty, finite and (unless `nonnegative` is
     False, as for temperatures that an offset makes positive) without negative values.
@@ -81,7 +58,7 @@ def load_grid(path, grid_name: str | None = None, index_to_world=None, *, nonneg
         values, matrix, name = _read_vdb(path, grid_name, index_to_world)
     else:
         raise SpectralError(f"grid file {path}: unknown grid format {path.suffix!r} (use .npy or .vdb)")
-    check_values(values, f"grid {name!r} in {path}", nonnegative)
+    grid_values(values, f"grid {name!r} in {path}", nonnegative)
     return Grid(values=values, index_to_world=matrix, name=name)
 
 
@@ -239,26 +216,6 @@ def _dense_buffer(shape, where: str) -> np.ndarray:
     _check_memory(int(np.prod(shape, dtype=object)) * 4,
                   f"{where}: a dense copy of its {'×'.join(map(str, shape))} active voxel box would")
     return np.zeros(tuple(int(n) for n in shape), dtype=np.float32)
-
-
-def check_values(values: np.ndarray, where: str, nonnegative: bool) -> None:
-    if values.ndim != 3:
-        raise SpectralError(f"{where} must be a 3-D array indexed [x, y, z], found shape {values.shape}")
-    if values.size == 0:
-        raise SpectralError(f"{where} is empty (shape {values.shape})")
-    bad = ~np.isfinite(values)
-    if bad.any():
-        raise SpectralError(f"{where} has {int(bad.sum())} NaN or infinite values, first at index {_first(bad)}")
-    negative = values < 0
-    if nonnegative and negative.any():
-        raise SpectralError(
-            f"{where} has {int(negative.sum())} negative values (min {values.min():g}), "
-            f"first at index {_first(negative)}"
-        )
-
-
-def _first(mask: np.ndarray) -> tuple:
-    return tuple(int(i) for i in np.argwhere(mask)[0])
 
 
 def _listing(grids: list) -> str:

@@ -290,8 +290,6 @@ class Scene:
 
 
 def _check_camera(camera: Camera, where: str) -> None:
-    from .grids import affine_matrix  # grids builds Grid objects from this module
-
     checks.whole_within(camera.width, f"{where}.width", 1)
     checks.whole_within(camera.height, f"{where}.height", 1)
     checks.one_of(camera.kind, f"{where}.kind", CAMERA_KINDS)
@@ -301,14 +299,12 @@ def _check_camera(camera: Camera, where: str) -> None:
     checks.number(camera.shift_x, f"{where}.shift_x")
     checks.number(camera.shift_y, f"{where}.shift_y")
     checks.positive(checks.number(camera.pixel_aspect, f"{where}.pixel_aspect"), f"{where}.pixel_aspect")
-    affine_matrix(camera.to_world, f"{where}.to_world")
+    checks.affine_matrix(camera.to_world, f"{where}.to_world")
 
 
 def _check_grid(grid: Grid, where: str, nonnegative: bool = True) -> None:
-    from .grids import affine_matrix, check_values
-
-    check_values(np.asarray(grid.values), f"{where}: grid {grid.name!r}", nonnegative)
-    affine_matrix(grid.index_to_world, f"{where}.index_to_world")
+    checks.grid_values(np.asarray(grid.values), f"{where}: grid {grid.name!r}", nonnegative)
+    checks.affine_matrix(grid.index_to_world, f"{where}.index_to_world")
 
 
 def _check_medium(medium: Medium, where: str) -> None:

@@ -12,11 +12,11 @@ from pathlib import Path
 import numpy as np
 
 from . import checks, spectra
-from .checks import shown
+from .checks import affine_matrix, shown
 from .errors import SpectralError
 from .files import IMAGE_LIMIT, SCENE_LIMIT, regular_file
 from .film import check_film_memory, film_bytes
-from .grids import affine_matrix, load_grid, save_grid_npy
+from .grids import load_grid, save_grid_npy
 from .scene import (LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
                     RenderSettings, Scene, Surface)
 from .spectra import Spectrum
