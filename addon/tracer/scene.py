@@ -147,8 +147,9 @@ class Light:
     ignored), emitting along its local −Z (the third column) with radiance P / (π · area) on that side
     and none behind, P being its power (`strength`). Next-event estimation samples it and rays that meet
     its emitting face add its radiance (weighted by MIS after scattering), as Cycles does; it blocks
-    nothing. Camera rays see it unless `camera_visible` is off (Blender's Object ▸ Visibility ▸ Ray
-    Visibility ▸ Camera).
+    nothing. Camera rays see it where `camera_visible` is on (Blender's Object ▸ Visibility ▸ Ray
+    Visibility ▸ Camera, off by default for a light object, as in Cycles; off for scene files that do not
+    say, which camera rays then pass through as before).
 
     An envmap is an equirectangular image around the scene (Blender's Environment Texture), with no
     `spectrum`: the radiance arriving from world direction ω is, in W·m⁻²·sr⁻¹·nm⁻¹,
@@ -181,7 +182,7 @@ class Light:
     area_shape: str = "rectangle"  # area: "rectangle" | "ellipse"
     size_x: float = 1.0  # area: width along its local X (the ellipse's diameter), in world units
     size_y: float = 1.0  # area: height along its local Y
-    camera_visible: bool = True  # area: whether camera rays see its emitting face
+    camera_visible: bool = False  # area: whether camera rays see its emitting face
     image: np.ndarray | None = None  # envmap: (H, W, 3) linear Rec.709 texels, row 0 at the top (+Z)
     basis: np.ndarray | tuple[Spectrum, ...] | None = None  # envmap: (3, GRID) or 3 spectra, per unit R, G, B
     to_world: np.ndarray | None = None  # envmap: (3, 3) the map's frame → world directions (None: identity)

@@ -265,7 +265,8 @@ def test_a_lamp_seen_through_the_smoke_renders_as_its_emissive_twin():
     below = np.diag([1.0, -1.0, -1.0, 1.0])  # looking up (+z) from 6 units below
     below[2, 3] = -6.0
     from_below = dataclasses.replace(from_below, camera=dataclasses.replace(from_below.camera, to_world=below))
-    lamp = from_below.lights[0]
+    lamp = dataclasses.replace(from_below.lights[0], camera_visible=True)
+    from_below = dataclasses.replace(from_below, lights=(lamp,))
     radiance = Spectrum(kernel_spectrum(lamp) / (lamp.size_x * lamp.size_y))
     twin = s.parallelogram(lamp.position - [1.5, 1.5, 0.0], (3.0, 0.0, 0.0), (0.0, 3.0, 0.0), reflectance=0.0,
                            emission=radiance)
