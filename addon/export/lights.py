@@ -7,7 +7,9 @@ Brightness is Blender's own, converted so that the same light looks the same in 
   light masked to its cone, it does not concentrate its power), so our intensity is P / (4π) per sr.
 - Area (Square, Rectangle, Disk, Ellipse): Power P in W is all it emits from its front (−Z), a
   Lambertian emitter of radiance P / (π A); the size is Blender's times the object's scale. Spread
-  below 180° renders as 180° (named in the warning).
+  below 180° renders as 180° (named in the warning). As in Cycles, camera rays see its face where the
+  object's Visibility ▸ Ray Visibility ▸ Camera is on (off by default for a light object), and rays after
+  scattering find it (MIS).
 All are scaled by 2^Exposure. The colour is Blender's: the light's Color (times the black body of its
 Temperature when that is on, times the Color and Strength of an Emission node in its node tree) as an
 emission spectrum (`tracer.spectra`), in the radiant unit so that the radiance is exactly Cycles' RGB as a
@@ -85,7 +87,8 @@ def export_light(obj, matrix, notes) -> Light | None:
         geometry = dict(direction=_axis(matrix, 2), angle=light.angle)
         strength = light.energy
     elif light.type == "AREA":
-        geometry, strength = _area(light, matrix, obj.name, notes), light.energy
+        geometry = dict(_area(light, matrix, obj.name, notes), camera_visible=bool(obj.visible_camera))
+        strength = light.energy
     else:
         geometry = dict(position=np.array(matrix.translation, dtype=np.float64))
         strength = point_intensity(light.energy)

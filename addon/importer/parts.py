@@ -144,7 +144,8 @@ def add_point_or_spot(collection, light: Light, name: str | None = None):
 
 def add_area(collection, light: Light, name: str | None = None):
     """An area light object of the tracer light: its power, shape and size, placed by its centre and axes
-    (Blender's area light shines along its −Z, as the tracer's); its spectrum as a curve."""
+    (Blender's area light shines along its −Z, as the tracer's), seen by the camera where the light is; its
+    spectrum as a curve."""
     equal = light.size_x == light.size_y
     shape = {("rectangle", True): "SQUARE", ("rectangle", False): "RECTANGLE", ("ellipse", True): "DISK",
              ("ellipse", False): "ELLIPSE"}[(light.area_shape, equal)]
@@ -157,6 +158,7 @@ def add_area(collection, light: Light, name: str | None = None):
     matrix = np.eye(4)
     matrix[:3, :3], matrix[:3, 3] = axes / np.linalg.norm(axes, axis=0), light.position
     obj.matrix_world = Matrix(matrix.tolist())
+    obj.visible_camera = bool(light.camera_visible)
     return obj
 
 

@@ -180,6 +180,7 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
         "smooth": np.zeros(count),
         "area_span": np.zeros((count, 2, 3)),
         "area_shape": np.zeros(count, dtype=np.int64),
+        "camera_visible": np.array([bool(light.camera_visible) for light in lights], dtype=np.bool_),
     }
     for index, light in enumerate(lights):
         if light.kind == "sun":
@@ -297,6 +298,7 @@ def _with_surface_lights(lights: KernelLights, surfaces: tuple[Surface, ...], em
         pos=np.concatenate([lights.pos, np.array(centres)]),
         area_span=np.concatenate([lights.area_span, np.zeros((extra, 2, 3))]),
         area_shape=np.concatenate([lights.area_shape, np.zeros(extra, np.int64)]),
+        camera_visible=np.concatenate([lights.camera_visible, np.zeros(extra, np.bool_)]),
         cos=np.concatenate([lights.cos, np.ones(extra)]),
         smooth=np.concatenate([lights.smooth, np.zeros(extra)]),
         pmf=_selection_pmf(power),

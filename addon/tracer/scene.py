@@ -145,9 +145,11 @@ class Light:
     rectangle of size_x × size_y, or an ellipse of those diameters, centred at `position` in the plane of
     its local X and Y axes (the columns of `area_axes`, normalised when compiled, so their lengths are
     ignored), emitting along its local −Z (the third column) with radiance P / (π · area) on that side
-    and none behind, P being its power (`strength`). It is only sampled by next-event estimation: camera
-    rays and scattered rays pass through it unseen (Cycles may show an area light to the camera; this
-    tracer draws none).
+    and none behind, P being its power (`strength`). Next-event estimation samples it and rays that meet
+    its emitting face add its radiance (weighted by MIS after scattering), as Cycles does; it blocks
+    nothing. Camera rays see it where `camera_visible` is on (Blender's Object ▸ Visibility ▸ Ray
+    Visibility ▸ Camera, off by default for a light object, as in Cycles; off for scene files that do not
+    say, which camera rays then pass through as before).
 
     An envmap is an equirectangular image around the scene (Blender's Environment Texture), with no
     `spectrum`: the radiance arriving from world direction ω is, in W·m⁻²·sr⁻¹·nm⁻¹,
@@ -180,6 +182,7 @@ class Light:
     area_shape: str = "rectangle"  # area: "rectangle" | "ellipse"
     size_x: float = 1.0  # area: width along its local X (the ellipse's diameter), in world units
     size_y: float = 1.0  # area: height along its local Y
+    camera_visible: bool = False  # area: whether camera rays see its emitting face
     image: np.ndarray | None = None  # envmap: (H, W, 3) linear Rec.709 texels, row 0 at the top (+Z)
     basis: np.ndarray | tuple[Spectrum, ...] | None = None  # envmap: (3, GRID) or 3 spectra, per unit R, G, B
     to_world: np.ndarray | None = None  # envmap: (3, 3) the map's frame → world directions (None: identity)
@@ -468,6 +471,8 @@ def _check_light(light: Light, where: str, cmf: str) -> None:
         checks.one_of(light.area_shape, f"{where}.area_shape", AREA_SHAPES)
         for key in ("size_x", "size_y"):
             checks.positive(checks.number(getattr(light, key), f"{where}.{key}"), f"{where}.{key}")
+        if not isinstance(light.camera_visible, (bool, np.bool_)):
+            raise SpectralError(f"{where}.camera_visible: expected true or false, found {checks.shown(light.camera_visible)}")
     _check_light_peak(light, where, cmf)
 
 

@@ -49,7 +49,7 @@ _LIGHT_FIELDS = {
     "sky": {"required": ("spectrum",), "optional": ("horizon_spectrum",)},
     "point": {"required": ("spectrum", "position"), "optional": ()},
     "spot": {"required": ("spectrum", "position", "spot_direction"), "optional": ("spot_size", "spot_blend")},
-    "area": {"required": ("spectrum", "position", "area_axes", "size_x", "size_y"), "optional": ("area_shape",)},
+    "area": {"required": ("spectrum", "position", "area_axes", "size_x", "size_y"), "optional": ("area_shape", "camera_visible")},
     "envmap": {"required": ("image", "basis"), "optional": ("to_world",)},
 }
 _ENVMAP_UNIT = "radiant"  # an envmap's only unit (its strength multiplies its map), so the file may omit it
@@ -255,6 +255,7 @@ def _light(value, where: str, folder: Path) -> Light:
         fields["area_shape"] = data.get("area_shape", Light.area_shape)
         for key in ("size_x", "size_y"):
             fields[key] = checks.number(data[key], f"{where}.{key}")
+        fields["camera_visible"] = data.get("camera_visible", Light.camera_visible)
     if kind == "envmap":
         fields["image"] = _image(data["image"], f"{where}.image", folder)
         basis = _list(data["basis"], f"{where}.basis")
@@ -518,6 +519,7 @@ def _light_json(light: Light, index: int, folder: Path) -> dict:
         data["area_axes"] = _floats(light.area_axes)
         data["area_shape"] = light.area_shape
         data["size_x"], data["size_y"] = float(light.size_x), float(light.size_y)
+        data["camera_visible"] = bool(light.camera_visible)
     if light.kind == "envmap":
         data["image"] = f"lights{index}_image.npy"
         np.save(folder / data["image"], np.ascontiguousarray(light.image, dtype=np.float32), allow_pickle=False)

@@ -345,6 +345,36 @@ def test_area_lights_match_cycles(factory, tmp_path, shape, size, size_y, scale)
     assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
 
 
+@pytest.mark.parametrize("visible", [True, False])
+def test_an_area_light_in_frame_is_seen_as_in_cycles(factory, tmp_path, visible):
+    """A square area light beside the volume cube, facing the camera: its face is seen at its radiance
+    P / (π A) (white: that in each of R, G, B) by both renderers where it is in frame, and the blocks agree; with
+    the object's Ray Visibility ▸ Camera off neither shows it, while it still lights the cube."""
+    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    camera = bpy.data.objects["Camera"]
+    light = bpy.data.objects["Light"]
+    light.data.type = "AREA"
+    area = light.data
+    area.shape, area.size, area.energy = "SQUARE", 1.5, 40.0
+    light.location = (-1.0, 2.5, 1.0)
+    look_at(light, tuple(camera.location))
+    light.visible_camera = visible
+    volume_shader(_cube_material(), Color=(0.8, 0.8, 0.8), Density=1.0, Anisotropy=0.2)
+    radiance = 40.0 / (math.pi * 1.5 * 1.5)
+    result = compare(factory, tmp_path, tracer_spp=64, cycles_spp=64)
+    print(result)
+    assert result.warnings == []
+    assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
+    traced, cycled = (image.max(axis=-1) for image in result.images)
+    face = np.abs(cycled - radiance) < 0.01 * radiance  # pixels wholly on the face, with no medium before it
+    if visible:
+        assert face.sum() >= 20
+        np.testing.assert_allclose(traced[face].mean(), radiance, rtol=0.01)
+    else:
+        assert face.sum() == 0 and traced.max() < 0.5 * radiance
+        assert result.traced.max() > 1e-3  # the cube is still lit
+
+
 def test_mix_shader_of_rayleigh_scatter_and_volume_coefficients_matches_cycles(factory, tmp_path):
     """Mix Shader (Fac 0.3) of a Rayleigh Volume Scatter and a Volume Coefficients closure (grey σ_s 1.2,
     σ_a 0.3, g 0.5): two media on one grid, as Cycles adds two closures."""

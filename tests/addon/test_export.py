@@ -330,16 +330,20 @@ def test_lights_and_world(registered, tmp_path):
     panel.data.shape, panel.data.size, panel.data.size_y = "RECTANGLE", 2.0, 0.5
     panel.scale = (1.5, 1.0, 1.0)
     panel.data.spectral.enabled = True
+    panel.visible_camera = True
+    hidden = link(bpy.data.objects.new("Hidden", bpy.data.lights.new("Hidden", "AREA")))  # Blender's default: off
+    hidden.data.spectral.enabled = True
     bpy.context.scene.world = bpy.data.worlds.new("Sky")
     bpy.context.scene.world.spectral.enabled = True
     bpy.context.scene.world.spectral.kind = "sky"
     bpy.context.scene.world.spectral.strength = 0.5
     result = _export()
     lights = {light.name: light for light in result.scene.lights}
-    assert set(lights) == {"Sun", "Bulb", "Spot", "Panel", "Sky"}
+    assert set(lights) == {"Sun", "Bulb", "Spot", "Panel", "Hidden", "Sky"}
     assert result.warnings == []
     panel = lights["Panel"]
     assert (panel.area_shape, panel.size_x, panel.size_y) == ("rectangle", pytest.approx(3.0), pytest.approx(0.5))
+    assert panel.camera_visible is True and lights["Hidden"].camera_visible is False  # Ray Visibility ▸ Camera
     np.testing.assert_allclose(panel.area_axes, np.eye(3), atol=1e-6)
     # Blender's sun shines along its −Z; ours points towards the sun (+Z), tilted by the 45° X rotation.
     np.testing.assert_allclose(lights["Sun"].direction, [0.0, -math.sqrt(0.5), math.sqrt(0.5)], atol=1e-6)

@@ -47,7 +47,8 @@ def _every_feature():
               spot_direction=np.array([0.6, -0.3, -0.74]) / np.linalg.norm([0.6, -0.3, -0.74]),
               spot_size=np.radians(50.0), spot_blend=0.3, name="Spot"),
         Light(kind="area", spectrum=spectra.blackbody(4000.0), strength=60.0, position=np.array([0.5, -1.0, 2.5]),
-              area_axes=_tilted_axes(), area_shape="ellipse", size_x=0.8, size_y=0.5, name="Panel", unit="radiant"),
+              area_axes=_tilted_axes(), area_shape="ellipse", size_x=0.8, size_y=0.5, name="Panel", unit="radiant",
+              camera_visible=True),
         Light(kind="sky", spectrum=spectra.blackbody(12000.0), strength=0.4,
               horizon_spectrum=smooth_ramp(1.0, 0.4), name="Sky"),
     ]

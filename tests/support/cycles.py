@@ -68,6 +68,7 @@ class Comparison(NamedTuple):
     cycled: np.ndarray  # Cycles' mean
     warnings: list
     white_y: float  # the luminance of the ΔE's white: the tracer's 99th percentile
+    images: tuple  # (the tracer's, Cycles' mean) linear Rec.709 images, top row first
 
     def delta_e_of(self, rgb_a, rgb_b) -> float:
         """CIEDE2000 between two linear Rec.709 colours against this comparison's white."""
@@ -90,7 +91,8 @@ def compare(scene, folder: Path, tracer_spp: int, cycles_spp: int, allowance=0.0
                     + (np.asarray(allowance) * blocks(traced)) ** 2)
     white_y = max(float(np.percentile(traced @ colorimetry.rgb_to_xyz_matrix()[1], 99)), 1e-6)
     z = np.abs(blocks(cycled) - blocks(traced)) / np.maximum(sigma, 1e-4 * white_y)
-    result = Comparison(0.0, float(z.max()), traced.mean(axis=(0, 1)), cycled.mean(axis=(0, 1)), warnings, white_y)
+    result = Comparison(0.0, float(z.max()), traced.mean(axis=(0, 1)), cycled.mean(axis=(0, 1)), warnings, white_y,
+                        (traced, cycled))
     return result._replace(delta_e=result.delta_e_of(result.cycled, result.traced))
 
 

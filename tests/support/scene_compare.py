@@ -70,6 +70,7 @@ def assert_same_scene(exported, reference, curve: bool, renamed=None, albedo_tol
         assert a.unit == b.unit, a.name
         if b.kind == "area":
             assert a.area_shape == b.area_shape and (a.size_x, a.size_y) == pytest.approx((b.size_x, b.size_y))
+            assert a.camera_visible == b.camera_visible, f"{a.name} camera visibility"
             np.testing.assert_allclose(a.area_axes, b.area_axes, atol=1e-6, err_msg=f"{a.name} axes")
         assert (a.horizon_spectrum is None) == (b.horizon_spectrum is None)
         shapes = [(light_shape(a, low), light_shape(b, low))]

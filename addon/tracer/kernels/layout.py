@@ -23,6 +23,7 @@ PHASE_RAYLEIGH = PHASES.index("rayleigh")
 LIGHT_SUN = LIGHT_KINDS.index("sun")
 LIGHT_ENVIRONMENT = LIGHT_KINDS.index("environment")
 LIGHT_SKY = LIGHT_KINDS.index("sky")
+LIGHT_POINT = LIGHT_KINDS.index("point")
 LIGHT_SPOT = LIGHT_KINDS.index("spot")
 LIGHT_AREA = LIGHT_KINDS.index("area")
 LIGHT_ENVMAP = LIGHT_KINDS.index("envmap")
@@ -133,6 +134,7 @@ class KernelLights(NamedTuple):
     pos: np.ndarray  # (NL, 3) point, spot; the centre of an area light
     area_span: np.ndarray  # (NL, 2, 3) half its size along its local X and Y, as world vectors
     area_shape: np.ndarray  # (NL,) its index in AREA_SHAPES
+    camera_visible: np.ndarray  # (NL,) bool: camera rays see an area light's face
     cos: np.ndarray  # (NL,) sun: cos of the half-angle (1: delta); spot: cos of the half cone
     smooth: np.ndarray  # (NL,) spot edge width in cosine
     pmf: np.ndarray  # (NL,) selection probability for next-event estimation

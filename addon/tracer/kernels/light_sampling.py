@@ -1,6 +1,7 @@
 """Lights at a point: the choice of a light for next-event estimation by its selection pmf
 (`KernelScene.lights.pmf`), a direction sampled towards it with its pdf and the radiance arriving along it,
-and the radiance and sampling pdf of the infinite lights along a direction that a path escapes in.
+the radiance and sampling pdf of the infinite lights along a direction that a path escapes in, and where a ray
+meets an area light's emitting face with the pdf the sampler gives that direction (`area_light_hit`).
 
 Plain arithmetic shared by both backends (`shared_math`): one path's scalars in the Numba kernel, arrays of
 paths in the NumPy backend (points and directions as components x, y, z; wavelengths located by
@@ -15,7 +16,8 @@ from ..phase import INV_FOUR_PI, sample_direction
 from ..shared_math import select, shared, shared_inline
 from .envmap import envmap_pdf, envmap_radiance, envmap_sample
 from .layout import (
-    AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_ENVMAP, LIGHT_MESH, LIGHT_SKY, LIGHT_SPOT, LIGHT_SUN)
+    AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_ENVMAP, LIGHT_MESH, LIGHT_POINT, LIGHT_SKY, LIGHT_SPOT,
+    LIGHT_SUN)
 from .lookups import table_at
 from .surfaces import emitter_pdf, emitter_point
 
@@ -39,13 +41,12 @@ def choose_light(pmf, u):
 
 @shared_inline
 def is_delta(ks, light):
-    """Whether the light is a delta light (a sun of no angle, a point, a spot), or an area light, which is
-    treated as one: sampled, never hit (paths do not see its surface, so no MIS weighs its samples). An
-    emissive surface is not: paths hit it."""
+    """Whether the light is a delta light (a sun of no angle, a point, a spot): sampled, never hit, so no MIS
+    weighs its samples. Area lights and emissive surfaces are not: paths hit them."""
     kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
         return ks.lights.cos[light] >= 1.0
-    return kind != LIGHT_ENVIRONMENT and kind != LIGHT_SKY and kind != LIGHT_ENVMAP and kind != LIGHT_MESH
+    return kind == LIGHT_POINT or kind == LIGHT_SPOT
 
 
 @shared_inline
@@ -116,12 +117,9 @@ def _angle(cosine):
 
 
 @shared_inline
-def spherical_rectangle_point(ks, light, px, py, pz, u1, u2):
-    """A point (qx, qy, qz) of a rectangle light drawn uniformly in the solid angle it subtends from point(s)
-    (px, py, pz) for uniforms u1, u2, and that solid angle (Ureña, Fajardo and King 2013, "An area-preserving
-    parametrization for spherical rectangles", as pbrt-v4 writes it). In the rectangle's frame (its unit
-    axes ex, ey and ez = ex × ey, origin at p) its corners are (x0 or x1, y0 or y1, z), and the algorithm
-    works with z0 = −|z|."""
+def _rectangle_frame(ks, light, px, py, pz):
+    """A rectangle light seen from point(s) (px, py, pz): its unit axes ex, ey, ez = ex × ey (9 components),
+    and in that frame with origin p its corners' coordinates x0 < x1, y0 < y1 and its plane's z."""
     span, centre = ks.lights.area_span[light], ks.lights.pos[light]
     half_x = np.sqrt(span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
     half_y = np.sqrt(span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2])
@@ -132,13 +130,37 @@ def spherical_rectangle_point(ks, light, px, py, pz, u1, u2):
     cy = centre[1] - span[0, 1] - span[1, 1] - py
     cz = centre[2] - span[0, 2] - span[1, 2] - pz
     x0, y0, z = cx * exx + cy * exy + cz * exz, cx * eyx + cy * eyy + cz * eyz, cx * ezx + cy * ezy + cz * ezz
-    x1, y1, z0 = x0 + 2.0 * half_x, y0 + 2.0 * half_y, -np.abs(z)
-    # The z components of the normals of the planes through p and each edge (the others cancel in the
-    # products), and the rectangle's angles on the sphere between consecutive planes.
+    return (exx, exy, exz, eyx, eyy, eyz, ezx, ezy, ezz, x0, y0, x0 + 2.0 * half_x, y0 + 2.0 * half_y, z)
+
+
+@shared_inline
+def _rectangle_angles(x0, y0, x1, y1, z0):
+    """The z components of the normals of the planes through the origin and each edge of the rectangle with
+    corners (x0 or x1, y0 or y1, z0), z0 ≤ 0 (the others cancel in the products), two of its angles on the
+    sphere between consecutive planes (g2, g3), and its solid angle, the sum of the four angles less 2π."""
     n0z, n1z = -y0 / np.sqrt(z0 * z0 + y0 * y0), x1 / np.sqrt(z0 * z0 + x1 * x1)
     n2z, n3z = y1 / np.sqrt(z0 * z0 + y1 * y1), -x0 / np.sqrt(z0 * z0 + x0 * x0)
     g0, g1, g2, g3 = _angle(-n0z * n1z), _angle(-n1z * n2z), _angle(-n2z * n3z), _angle(-n3z * n0z)
-    solid_angle = g0 + g1 + g2 + g3 - 2.0 * np.pi
+    return n0z, n2z, g2, g3, g0 + g1 + g2 + g3 - 2.0 * np.pi
+
+
+@shared_inline
+def rectangle_solid_angle(ks, light, px, py, pz):
+    """The solid angle a rectangle light subtends from point(s) (px, py, pz)."""
+    frame = _rectangle_frame(ks, light, px, py, pz)
+    return _rectangle_angles(frame[9], frame[10], frame[11], frame[12], -np.abs(frame[13]))[4]
+
+
+@shared_inline
+def spherical_rectangle_point(ks, light, px, py, pz, u1, u2):
+    """A point (qx, qy, qz) of a rectangle light drawn uniformly in the solid angle it subtends from point(s)
+    (px, py, pz) for uniforms u1, u2, and that solid angle (Ureña, Fajardo and King 2013, "An area-preserving
+    parametrization for spherical rectangles", as pbrt-v4 writes it). In the rectangle's frame (its unit
+    axes ex, ey and ez = ex × ey, origin at p) its corners are (x0 or x1, y0 or y1, z), and the algorithm
+    works with z0 = −|z|."""
+    exx, exy, exz, eyx, eyy, eyz, ezx, ezy, ezz, x0, y0, x1, y1, z = _rectangle_frame(ks, light, px, py, pz)
+    z0 = -np.abs(z)
+    n0z, n2z, g2, g3, solid_angle = _rectangle_angles(x0, y0, x1, y1, z0)
     # x: invert the solid angle's cdf along the rectangle's x edge.
     au = u1 * solid_angle + (2.0 * np.pi - g2 - g3)
     fu = (np.cos(au) * n0z - n2z) / np.sin(au)
@@ -154,6 +176,74 @@ def spherical_rectangle_point(ks, light, px, py, pz, u1, u2):
 
 
 @shared_inline
+def area_light_area(ks, light):
+    """An area light's area: 4 |X| |Y| for a rectangle of half-axes X, Y (`area_span`), π |X| |Y| for an
+    ellipse."""
+    span = ks.lights.area_span[light]
+    product = np.sqrt((span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
+                      * (span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2]))
+    if ks.lights.area_shape[light] == AREA_ELLIPSE:
+        return np.pi * product
+    return 4.0 * product
+
+
+@shared_inline
+def _by_solid_angle(solid_angle):
+    """Whether a rectangle subtending `solid_angle` is sampled in it (within SOLID_ANGLE_SAMPLED), not over its
+    area."""
+    return (solid_angle >= SOLID_ANGLE_SAMPLED[0]) & (solid_angle <= SOLID_ANGLE_SAMPLED[1])
+
+
+@shared_inline
+def _sampled_pdf(ks, light, solid_angle, distance, cos_light):
+    """The solid-angle pdf of a direction to a point of an area light at `distance` whose emitting normal makes
+    cosine `cos_light` with the way back, drawn uniformly in `solid_angle` Ω (1/Ω), or over the area A where
+    that is 0 (d² / (A cos θ); 0 behind the light or in its plane)."""
+    over_area = select(cos_light > 0.0, distance * distance / (area_light_area(ks, light) * cos_light), 0.0)
+    return select(solid_angle > 0.0, 1.0 / select(solid_angle > 0.0, solid_angle, 1.0), over_area)
+
+
+@shared_inline
+def area_direction_pdf(ks, light, px, py, pz, distance, cos_light):
+    """The solid-angle pdf with which `sample_light` draws, from point(s) (px, py, pz), the direction to a point
+    of an area light at `distance` whose emitting normal makes cosine `cos_light` with the way back: 1/Ω for a
+    rectangle it samples in its solid angle Ω (`area_point`), else over the area."""
+    solid_angle = 0.0 * distance
+    if ks.lights.area_shape[light] != AREA_ELLIPSE:
+        solid_angle = rectangle_solid_angle(ks, light, px, py, pz)
+        solid_angle = select(_by_solid_angle(solid_angle), solid_angle, 0.0)
+    return _sampled_pdf(ks, light, solid_angle, distance, cos_light)
+
+
+@shared_inline
+def area_light_hit(ks, light, ox, oy, oz, dx, dy, dz, t_max):
+    """Where the ray(s) o + t d (d a unit vector) meet the emitting face of area light `light` (one facing back
+    along the ray, so the light emits towards o) with 0 < t < t_max: t, or inf where it does not. Behind the
+    light, in its plane and beyond its edge the ray passes by: a light is no obstacle."""
+    normal, centre, span = ks.lights.dir[light], ks.lights.pos[light], ks.lights.area_span[light]
+    facing = -(dx * normal[0] + dy * normal[1] + dz * normal[2])
+    height = (ox - centre[0]) * normal[0] + (oy - centre[1]) * normal[1] + (oz - centre[2]) * normal[2]
+    t = select(facing > 0.0, height / select(facing > 0.0, facing, 1.0), -1.0)
+    rx, ry, rz = ox + t * dx - centre[0], oy + t * dy - centre[1], oz + t * dz - centre[2]
+    a = (rx * span[0, 0] + ry * span[0, 1] + rz * span[0, 2]) / (
+        span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
+    b = (rx * span[1, 0] + ry * span[1, 1] + rz * span[1, 2]) / (
+        span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2])
+    if ks.lights.area_shape[light] == AREA_ELLIPSE:
+        inside = a * a + b * b <= 1.0
+    else:
+        inside = (np.abs(a) <= 1.0) & (np.abs(b) <= 1.0)
+    return select(inside & (t > 0.0) & (t < t_max), t, np.inf)
+
+
+@shared_inline
+def area_radiance(ks, light, at):
+    """An area light's radiance on its emitting side at the wavelengths located by `at`: its spectrum (its
+    intensity along its normal, P/π) over its area."""
+    return table_at(ks.lights.spd, light, at) / area_light_area(ks, light)
+
+
+@shared_inline
 def area_point(ks, light, px, py, pz, u1, u2):
     """A point (qx, qy, qz) of an area light seen from point(s) (px, py, pz), drawn for uniforms u1, u2, with
     the solid angle it was drawn uniformly in (`spherical_rectangle_point`: a rectangle subtending a solid
@@ -163,7 +253,7 @@ def area_point(ks, light, px, py, pz, u1, u2):
     if ks.lights.area_shape[light] == AREA_ELLIPSE:
         return qx, qy, qz, 0.0 * u1
     sx, sy, sz, solid_angle = spherical_rectangle_point(ks, light, px, py, pz, u1, u2)
-    by_solid_angle = (solid_angle >= SOLID_ANGLE_SAMPLED[0]) & (solid_angle <= SOLID_ANGLE_SAMPLED[1])
+    by_solid_angle = _by_solid_angle(solid_angle)
     return (select(by_solid_angle, sx, qx), select(by_solid_angle, sy, qy), select(by_solid_angle, sz, qz),
             select(by_solid_angle, solid_angle, 0.0))
 
@@ -173,12 +263,13 @@ def sample_light(ks, light, px, py, pz, u1, u2):
     """A direction (wx, wy, wz) from point(s) (px, py, pz) towards the light for uniforms u1, u2: uniform in
     a finite sun's cone or over the sphere for an environment or a sky, texel by texel for an envmap
     (`envmap.envmap_sample`), towards a point of an area light
-    (`area_point`). Returns it with its solid-angle pdf (1 for a delta light and an area light), the distance
-    to the light (inf for suns and the sphere) and the falloff of a point or spot light: 1/d², times a spot's
-    cone (smoothed over its blend). An area light's spectrum is its intensity P/π along its normal, its
-    radiance L = P/(πA) times its area A, so its falloff makes L over the point's pdf the estimate: Ω / A for
-    a point drawn uniformly in the solid angle Ω, cos θ / d² for one drawn with pdf 1/A over the area, θ
-    the angle from the light's emitting normal (both 0 behind the light)."""
+    (`area_point`). Returns it with its solid-angle pdf (1 for a delta light; for an area light
+    `area_direction_pdf`), the distance to the light (inf for suns and the sphere) and the falloff of a point
+    or spot light: 1/d², times a spot's cone (smoothed over its blend). An area light's spectrum is its
+    intensity P/π along its normal, its radiance L = P/(πA) times its area A, so its falloff is 1/A on its
+    emitting side (0 behind it): radiance over pdf is then L Ω for a point drawn uniformly in the solid angle
+    Ω, L A cos θ / d² for one drawn with pdf 1/A over the area, θ the angle from the light's emitting
+    normal."""
     kind = ks.lights.kind[light]
     if kind == LIGHT_SUN:
         to_sun = ks.lights.dir[light]
@@ -220,21 +311,19 @@ def sample_light(ks, light, px, py, pz, u1, u2):
         else:
             falloff = falloff * (cos_angle >= ks.lights.cos[light])
     if kind == LIGHT_AREA:
-        normal, span = ks.lights.dir[light], ks.lights.area_span[light]
-        cos_light = np.maximum(-(wx * normal[0] + wy * normal[1] + wz * normal[2]), 0.0)
-        rectangle_area = 4.0 * np.sqrt((span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
-                             * (span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2]))
-        falloff = select(solid_angle > 0.0, (cos_light > 0.0) * solid_angle / rectangle_area,
-                         falloff * cos_light)
+        normal = ks.lights.dir[light]
+        cos_light = -(wx * normal[0] + wy * normal[1] + wz * normal[2])
+        return (wx, wy, wz, _sampled_pdf(ks, light, solid_angle, distance, cos_light), distance,
+                (cos_light > 0.0) / area_light_area(ks, light))
     return wx, wy, wz, 1.0, distance, falloff
 
 
 @shared_inline
 def incident_radiance(ks, light, at, wx, wy, wz, falloff):
     """Radiance arriving along a direction that `sample_light` drew, at the wavelengths located by `at`: a
-    delta or area light's spectrum (irradiance or intensity) times the sample's falloff, an emissive
+    delta or area light's spectrum (irradiance, intensity) times the sample's falloff, an emissive
     surface's radiance (the same on both sides), else `infinite_radiance`."""
-    if is_delta(ks, light):
+    if is_delta(ks, light) or ks.lights.kind[light] == LIGHT_AREA:
         return table_at(ks.lights.spd, light, at) * falloff
     if ks.lights.kind[light] == LIGHT_MESH:
         return table_at(ks.lights.spd, light, at)

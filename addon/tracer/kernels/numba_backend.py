@@ -19,7 +19,8 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   is added to the path's. The sub-path's own reservoirs give the next (cascades, no recursion).
 - Next-event estimation at every real scattering vertex with ratio-tracked transmittance (residual
   ratio tracking towards delta lights and on grey paths), combined with phase sampling by MIS for
-  environment, sky, envmaps and finite suns (on grey paths weighed by the controls' transmittance, `_is_grey`).
+  environment, sky, envmaps, finite suns and area lights (on grey paths weighed by the controls' transmittance,
+  `_is_grey`). A free flight adds the area lights whose emitting faces it passes (`_area_light_seen`).
 - Thermal emission σ_a·Planck(T) and glow (emission that does not depend on absorption) are collected at every
   tentative collision.
 - Surfaces (opaque Lambertian triangles, some emissive) end free flights: the closest hit along a ray
@@ -61,6 +62,7 @@ from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
     BVH_MAX_DEPTH,
     GREY_SPREAD,
+    LIGHT_AREA,
     MAX_WAVELENGTHS_PER_PATH,
     PHASE_RAYLEIGH,
     SHADOW_ROULETTE_BELOW,
@@ -68,7 +70,17 @@ from .layout import (
     SURFACE_OFFSET,
     KernelScene,
 )
-from .light_sampling import choose_light, incident_radiance, infinite_pdf, infinite_radiance, is_delta, sample_light
+from .light_sampling import (
+    area_direction_pdf,
+    area_light_hit,
+    area_radiance,
+    choose_light,
+    incident_radiance,
+    infinite_pdf,
+    infinite_radiance,
+    is_delta,
+    sample_light,
+)
 from .lookups import on_grid, table_at
 from .media import (
     albedo,
@@ -391,6 +403,38 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
     return wx, wy, wz, direction_pdf, distance, is_delta(ks, light)
 
 
+@jit(inline="always")
+def _next_area_light(ks, ox, oy, oz, dx, dy, dz, after, after_light, t_max):
+    """The next area light face that the ray o + t d meets after (after, after_light) (its t, then its
+    index, in that order) and before t_max: (t, light), or (INF, -1) where none is."""
+    best_t, best = INF, -1
+    for chosen in range(ks.lights.kind.shape[0]):
+        if ks.lights.kind[chosen] != LIGHT_AREA:
+            continue
+        t = area_light_hit(ks, chosen, ox, oy, oz, dx, dy, dz, t_max)
+        if (t > after or (t == after and chosen > after_light)) and t < best_t:
+            best_t, best = t, chosen
+    return best_t, best
+
+
+@jit(inline="always")
+def _area_light_seen(ks, chosen, ox, oy, oz, dx, dy, dz, distance, scattered, n, path, light):
+    """Radiance of the area light `chosen` whose emitting face a ray from the vertex o along d reaches at
+    `distance` (`_free_flight`, with the path's weights there), added by `_add_hit_light` (its light pdf: the
+    light's choice times `light_sampling.area_direction_pdf` from o); camera rays see it only where it is
+    visible to the camera."""
+    if not scattered and not ks.lights.camera_visible[chosen]:
+        return
+    for i in range(n):
+        light.radiance[i] = area_radiance(ks, chosen, on_grid(path.lams[i]))
+    light_pdf = 0.0
+    if scattered:
+        normal = ks.lights.dir[chosen]
+        cos_light = -(dx * normal[0] + dy * normal[1] + dz * normal[2])
+        light_pdf = ks.lights.pmf[chosen] * area_direction_pdf(ks, chosen, ox, oy, oz, distance, cos_light)
+    _add_hit_light(scattered, 1.0, light_pdf, n, path, light)
+
+
 # ----------------------------------------------------------------------------- surfaces
 
 @jit(inline="always")
@@ -650,9 +694,13 @@ def _is_grey(ks, n, spec):
     light is not a delta light, and the path is grey (every medium attenuates its wavelengths alike, to
     GREY_SPREAD). Then the unidirectional strategy's null-event probabilities are the same at every
     wavelength and cancel out of the spectral MIS, so MIS may give both strategies the controls'
-    transmittance in their place (docs/algorithm.md, "Lights and next-event estimation")."""
-    hit_light = False  # a light that paths may find (not a delta or area light)
+    transmittance in their place (docs/algorithm.md, "Lights and next-event estimation"). Never in a scene
+    with an area light: a path meets its face inside a free flight, where the controls' transmittance up to
+    it is not kept."""
+    hit_light = False  # a light that paths may find (not a delta light)
     for light in range(ks.lights.kind.shape[0]):
+        if ks.lights.kind[light] == LIGHT_AREA:
+            return False  # its hits are weighed with the null-event probabilities in r_l (`_area_light_seen`)
         if not is_delta(ks, light):
             hit_light = True
     if not hit_light:
@@ -824,11 +872,14 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
 
 
 @jit(inline="always")
-def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, n, path, vertex, tracker, fl):
+def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, n, path, vertex, tracker, fl,
+                 light):
     """Delta tracking to the next real event before t_max (a surface; EVENT_ESCAPE there), collecting emission
     (thermal, glow) and offering fluorescent sources at every tentative collision and weighting null collisions
     (spectral MIS ratios included). Returns (event, collision point, σ̄ there); `vertex` keeps the coefficients
-    at a scattering collision.
+    at a scattering collision. The area lights whose emitting faces the flight passes are added as it passes
+    them (`_area_light_seen`, with the weights since the last tentative collision: the path's state at the
+    face; `scattered`: whether o is a scattering vertex), drawing no random number.
 
     With `controls` (a grey path after a scattering vertex, `_is_grey`), light sampling's MIS ratio `r_l`
     takes no null-event probabilities: the controls are integrated instead, and an escaping path's
@@ -841,8 +892,12 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, n, path, ve
             tracker.state_f[m, DEPTH] = 0.0
     fl.tau[0] = 0.0
     t = 0.0
+    t_light, seen = _next_area_light(ks, ox, oy, oz, dx, dy, dz, 0.0, -1, t_max)
     while True:
         t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t, controls)
+        while t > t_light:
+            _area_light_seen(ks, seen, ox, oy, oz, dx, dy, dz, t_light, scattered, n, path, light)
+            t_light, seen = _next_area_light(ks, ox, oy, oz, dx, dy, dz, t_light, seen, t_max)
         if t == INF:
             return EVENT_ESCAPE, ox, oy, oz, 0.0
         qx, qy, qz = ox + t * dx, oy + t * dy, oz + t * dz
@@ -989,8 +1044,8 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, ligh
                 return
         t_hit, triangle = _closest_hit(ks, ox, oy, oz, dx, dy, dz, INF, False, hit)
         controls = grey and scattered
-        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, t_hit, depth, controls, n, path,
-                                                    vertex, tracker, fl)
+        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, t_hit, depth, controls, scattered, n,
+                                                    path, vertex, tracker, fl, light)
         if event == EVENT_ABSORB:
             return
         if event == EVENT_ESCAPE:

@@ -36,8 +36,11 @@ from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
 from .geometry import camera_ray, normalize, transform_point, transform_vector
-from .layout import GREY_SPREAD, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP, SURFACE_OFFSET
-from .light_sampling import choose_light, incident_radiance, infinite_pdf, infinite_radiance, is_delta, sample_light
+from .layout import (
+    GREY_SPREAD, LIGHT_AREA, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP, SURFACE_OFFSET)
+from .light_sampling import (
+    area_direction_pdf, area_light_hit, area_radiance, choose_light, incident_radiance, infinite_pdf,
+    infinite_radiance, is_delta, sample_light)
 from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
@@ -326,6 +329,34 @@ def _sample_lights(ks, lights, points, u1, u2, lams):
     return out
 
 
+def _next_area_lights(ks, origins, directions, after, after_light, t_max):
+    """Each ray's next area light face after (after, after_light) (its t, then its index) and before t_max:
+    (t, light), INF and -1 where none is (the Numba kernel's `_next_area_light`)."""
+    best_t, best = np.full(origins.shape[0], INF), np.full(origins.shape[0], -1, dtype=np.int64)
+    for light in np.flatnonzero(ks.lights.kind == LIGHT_AREA):
+        t = area_light_hit(ks, light, *_columns(origins), *_columns(directions), t_max)
+        closer = ((t > after) | ((t == after) & (light > after_light))) & (t < best_t)
+        best_t[closer], best[closer] = t[closer], light
+    return best_t, best
+
+
+def _area_lights_seen(ks, paths, rows, lights, distance, radiance):
+    """Radiance of the area lights (`lights`) whose emitting faces paths `rows` reach at `distance` along their
+    rays from their vertices, with their weights there: plain for camera rays (where the light is visible to
+    the camera), MIS-weighted against light sampling after a scattering vertex (the Numba kernel's
+    `_area_light_seen`)."""
+    for light in np.unique(lights):
+        mine = (lights == light) & (paths.scattered[rows] | ks.lights.camera_visible[light])
+        seen = rows[mine]
+        emitted = area_radiance(ks, light, on_grid(paths.lams[seen]))
+        cos_light = -(paths.d[seen] @ ks.lights.dir[light])
+        light_pdf = (ks.lights.pmf[light] * area_direction_pdf(ks, light, *_columns(paths.o[seen]), distance[mine],
+                                                               cos_light))[:, None]
+        r_u, scattered = paths.r_u[seen], paths.scattered[seen]
+        mean_r = np.where(scattered, _mean(r_u + paths.r_l[seen] * light_pdf), _mean(r_u))[:, None]
+        radiance[paths.id[seen]] += np.where(mean_r > 0.0, paths.beta[seen] * emitted / mean_r, 0.0)
+
+
 # ----------------------------------------------------------------------------- surfaces
 
 def _closest_hits(ks, origins, directions, t_max):
@@ -470,11 +501,24 @@ def _free_flight(ks, paths, radiance, fl, t_max):
                     medium_s=np.zeros((count, ks.media.density_scale.shape[0], n)), survival=np.ones(count))
     controls = paths.grey & paths.scattered
     depth = np.zeros((count, ks.media.density_scale.shape[0]))  # the controls' integral along each ray so far
+    t_light, seen = _next_area_lights(ks, paths.o, paths.d, 0.0, -1, t_max)
+
+    def pass_lights(rows, t):
+        """Add the area lights that paths `rows` pass before t (as the Numba kernel's `_free_flight`)."""
+        k = np.flatnonzero(t > t_light[rows])
+        while k.size:
+            passing = rows[k]
+            _area_lights_seen(ks, paths, passing, seen[passing], t_light[passing], radiance)
+            t_light[passing], seen[passing] = _next_area_lights(ks, paths.o[passing], paths.d[passing],
+                                                                t_light[passing], seen[passing],
+                                                                np.broadcast_to(t_max, (count,))[passing])
+            k = k[t[k] > t_light[passing]]
 
     def travel(rays, dt, control):
         depth[rays] += control * dt[:, None]
 
     def collide(rows, points, sigma_bar):
+        pass_lights(rows, np.sum((points - paths.o[rows]) * paths.d[rows], axis=1))
         c = _coefficients(ks, points, paths.lams[rows])
         beta, r_u, r_l = paths.beta[rows], paths.r_u[rows], paths.r_l[rows]
         bar = sigma_bar[:, None]
@@ -505,6 +549,8 @@ def _free_flight(ks, paths, radiance, fl, t_max):
     fl.tau[paths.id] = 0.0
     _track(ks, paths, np.arange(count), paths.o, paths.d, t_max, collide, controls=controls,
            travel=travel if controls.any() else None)
+    escaped = np.flatnonzero(vertex.event == EVENT_ESCAPE)
+    pass_lights(escaped, np.full(escaped.size, INF))
     escaped = np.flatnonzero(controls & (vertex.event == EVENT_ESCAPE))
     spectra = _attenuation_spectra(ks, paths.lams[escaped, :1])
     vertex.survival[escaped] = np.exp(-_control_depth(depth[escaped], *spectra)[:, 0])
@@ -549,8 +595,8 @@ def _control_depth(depth, extinction, excitation):
 
 def _is_grey(ks, lams):
     """The Numba kernel's `_is_grey` for paths of wavelengths `lams`: a light is not a delta light and every
-    medium attenuates each path's wavelengths alike (to GREY_SPREAD)."""
-    if all(is_delta(ks, light) for light in range(ks.lights.kind.shape[0])):
+    medium attenuates each path's wavelengths alike (to GREY_SPREAD); never with an area light."""
+    if all(is_delta(ks, light) for light in range(ks.lights.kind.shape[0])) or np.any(ks.lights.kind == LIGHT_AREA):
         return np.zeros(lams.shape[0], dtype=bool)
     value = media.attenuation(1.0, *_attenuation_spectra(ks, lams))
     first = value[:, :, :1]

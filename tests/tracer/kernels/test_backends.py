@@ -129,15 +129,17 @@ def point_and_spot():
 
 
 def area_lights():
-    """A rectangle beside the medium, tilted towards it, and a chromatic disk above it facing down (both
-    outside it, for the reason `point_and_spot` gives)."""
+    """A rectangle beside the medium, tilted towards it, a chromatic disk above it facing down (both outside it,
+    for the reason `point_and_spot` gives), and a small square above it facing up, which the camera sees."""
     medium = s.medium(s.box_grid(), extinction=s.smooth_ramp(1.2, 0.6), albedo=0.9, g=0.3)
     tilted = np.column_stack([[0.0, 1.0, 0.0], [0.6, 0.0, -0.8], [-0.8, 0.0, -0.6]])  # emits along (0.8, 0, 0.6)
     rectangle = Light(kind="area", spectrum=spectra.constant(1.0), strength=40.0, position=np.array([-2.0, 0.0, -0.5]),
                       area_axes=tilted, size_x=1.5, size_y=0.8)
     disk = Light(kind="area", spectrum=s.smooth_ramp(0.2, 1.0), strength=30.0, position=np.array([0.3, 0.0, 1.8]),
                  area_axes=np.eye(3), area_shape="ellipse", size_x=1.2, size_y=1.2)
-    return s.scene(s.perspective_camera(8, 8), [medium], [rectangle, disk])
+    seen = Light(kind="area", spectrum=s.smooth_ramp(1.0, 0.3), strength=2.0, position=np.array([0.5, 0.4, 1.5]),
+                 area_axes=np.diag([1.0, -1.0, -1.0]), size_x=0.5, size_y=0.4, camera_visible=True)
+    return s.scene(s.perspective_camera(8, 8), [medium], [rectangle, disk, seen])
 
 
 def envmap():

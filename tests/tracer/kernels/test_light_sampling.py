@@ -1,8 +1,9 @@
 """Every light sampler of next-event estimation against the pdf it returns (Pearson χ², as the phase samplers
 in test_phase.py): the choice of a light by its pmf, a finite sun's cone, the sphere of an environment or a
 sky, an envmap's texels and the directions inside them, a rectangle light in the solid angle it subtends and
-over its area, an ellipse over its area; and the delta lights (point, spot), which have no pdf, aim at their
-light with Blender's falloff.
+over its area, an ellipse over its area, and the pdf a ray that meets an area light's face is weighed with
+(`area_light_hit`, `area_direction_pdf`) against the sampler's draws; and the delta lights (point, spot), which
+have no pdf, aim at their light with Blender's falloff.
 
 The samplers are the shared functions of `kernels/light_sampling.py`, called here on arrays of samples as the
 NumPy backend calls them (the Numba kernel compiles the same code). Every χ² test uses a fixed seed and passes
@@ -16,7 +17,8 @@ import pytest
 
 from addon.tracer import spectra
 from addon.tracer.kernels.envmap import row_solid_angle, texel_of
-from addon.tracer.kernels.light_sampling import SOLID_ANGLE_SAMPLED, choose_light, infinite_pdf, sample_light
+from addon.tracer.kernels.light_sampling import (
+    SOLID_ANGLE_SAMPLED, area_direction_pdf, area_light_hit, choose_light, infinite_pdf, sample_light)
 from addon.tracer.lowering import compile_scene
 from addon.tracer.phase import orthonormal_basis
 from addon.tracer.scene import Light
@@ -164,16 +166,18 @@ def area_light(shape, size_x, size_y):
 
 def area_sample(light, offset, seed):
     """Points drawn on `light` from CENTRE + AXES @ offset: their coordinates (a, b) along the light's half
-    sizes (in [−1, 1]), the point seen from, and the sampler's falloff."""
+    sizes (in [−1, 1]), the point seen from, and the sampler's solid-angle pdf. Its falloff is 1 / area in
+    front of the light (the radiance is then the spectrum over the area)."""
     ks = compiled(light)
     point = CENTRE + AXES @ np.asarray(offset, dtype=np.float64)
     u1, u2 = uniforms(seed)
     wx, wy, wz, pdf, distance, falloff = sample_light(ks, 0, *(np.full(N, c) for c in point), u1, u2)
-    assert np.all(pdf == 1.0)
+    area = light.size_x * light.size_y * (np.pi / 4 if light.area_shape == "ellipse" else 1.0)
+    np.testing.assert_allclose(falloff, 1.0 / area, rtol=1e-12)
     q = point[:, None] + distance * np.array([wx, wy, wz])
     local = AXES.T @ (q - CENTRE[:, None])
     np.testing.assert_allclose(local[2], 0.0, atol=1e-9)  # in the light's plane
-    return local[0] / (0.5 * light.size_x), local[1] / (0.5 * light.size_y), point, falloff
+    return local[0] / (0.5 * light.size_x), local[1] / (0.5 * light.size_y), point, pdf
 
 
 def triangle_solid_angle(a, b, c):
@@ -207,14 +211,14 @@ def cell_solid_angles(light, point, edges):
 ])
 def test_a_rectangle_is_sampled_uniformly_in_the_solid_angle_it_subtends(size_x, size_y, offset):
     """Points on a rectangle in front of it, binned in 10 × 10 cells: each cell is drawn with probability
-    (its solid angle) / Ω, and the solid angle the sampler says it drew in (falloff × area) is Ω."""
+    (its solid angle) / Ω, and the sampler's pdf is 1 / Ω."""
     light = area_light("rectangle", size_x, size_y)
-    a, b, point, falloff = area_sample(light, offset, seed=8)
+    a, b, point, pdf = area_sample(light, offset, seed=8)
     edges = np.linspace(-1.0, 1.0, 11)
     solid_angles = cell_solid_angles(light, point, edges)
     total = solid_angles.sum()
     assert SOLID_ANGLE_SAMPLED[0] < total < SOLID_ANGLE_SAMPLED[1]
-    np.testing.assert_allclose(falloff * size_x * size_y, total, rtol=1e-9)
+    np.testing.assert_allclose(1.0 / pdf, total, rtol=1e-9)
     counts = histogram2d(np.clip(a, -1.0, 1.0), np.clip(b, -1.0, 1.0), edges, edges)
     assert chi_square_pvalue(counts, solid_angles / total) > P_MIN
 
@@ -226,9 +230,10 @@ def test_a_rectangle_is_sampled_uniformly_in_the_solid_angle_it_subtends(size_x,
 ])
 def test_area_samples_are_uniform_over_the_area(shape, size_x, size_y, offset):
     """Points drawn over the area (pdf 1/A): equal counts in cells of equal area (a rectangle's 10 × 10 cells;
-    an ellipse's 8 rings of equal area × 12 sectors), with the falloff cos θ_q / d² of a point drawn so."""
+    an ellipse's 8 rings of equal area × 12 sectors), with the solid-angle pdf d² / (A cos θ_q) of a point drawn
+    so."""
     light = area_light(shape, size_x, size_y)
-    a, b, point, falloff = area_sample(light, offset, seed=9)
+    a, b, point, pdf = area_sample(light, offset, seed=9)
     if shape == "rectangle":
         edges = np.linspace(-1.0, 1.0, 11)
         counts = histogram2d(np.clip(a, -1.0, 1.0), np.clip(b, -1.0, 1.0), edges, edges)
@@ -240,7 +245,89 @@ def test_area_samples_are_uniform_over_the_area(shape, size_x, size_y, offset):
     v = q - point[:, None]
     d2 = (v * v).sum(axis=0)
     cos_light = np.maximum(v.T @ AXES[:, 2], 0.0) / np.sqrt(d2)  # it emits along its local −Z, towards −v
-    np.testing.assert_allclose(falloff, cos_light / d2, rtol=1e-9)
+    area = size_x * size_y * (np.pi / 4 if shape == "ellipse" else 1.0)
+    np.testing.assert_allclose(1.0 / pdf, area * cos_light / d2, rtol=1e-9)
+
+
+def fine_points(shape, nodes):
+    """Midpoints of a fine grid over a light in half sizes (a, b), each with its share of the area (summing to
+    1): a square grid for a rectangle, polar for an ellipse."""
+    mid = (np.arange(nodes) + 0.5) / nodes
+    if shape == "rectangle":
+        a, b = np.meshgrid(2 * mid - 1, 2 * mid - 1, indexing="ij")
+        return a.ravel(), b.ravel(), np.full(a.size, 1.0 / a.size)
+    rho, phi = np.meshgrid(np.sqrt(mid), 2 * np.pi * mid, indexing="ij")  # rings of equal area
+    return (rho * np.cos(phi)).ravel(), (rho * np.sin(phi)).ravel(), np.full(rho.size, 1.0 / rho.size)
+
+
+def cells(shape, a, b):
+    """The cell of each point (a, b): 10 × 10 for a rectangle, 8 rings of equal area × 12 sectors for an
+    ellipse."""
+    if shape == "rectangle":
+        return (np.clip(((a + 1) * 5).astype(int), 0, 9) * 10 + np.clip(((b + 1) * 5).astype(int), 0, 9)), 100
+    ring = np.clip((np.clip(a * a + b * b, 0.0, 1.0) * 8).astype(int), 0, 7)
+    sector = np.clip(((np.arctan2(b, a) + np.pi) / (2 * np.pi) * 12).astype(int), 0, 11)
+    return ring * 12 + sector, 96
+
+
+@pytest.mark.parametrize("shape, size_x, size_y, offset", [
+    ("rectangle", 1.2, 0.5, [0.4, -0.3, -0.9]),  # near: by solid angle
+    ("rectangle", 1.2, 0.5, [0.5, 0.2, -0.05]),  # very near: most of a hemisphere
+    ("rectangle", 0.1, 0.05, [1.0, 2.0, -5.0]),  # far: a solid angle below SOLID_ANGLE_SAMPLED, by area
+    ("ellipse", 1.5, 0.4, [0.4, -0.3, -0.9]),  # near
+    ("ellipse", 0.1, 0.05, [1.0, 2.0, -5.0]),  # far
+])
+def test_a_ray_meeting_an_area_light_has_the_samplers_pdf(shape, size_x, size_y, offset):
+    """The pdf a ray that meets the light's face is weighed with (`area_light_hit` for where, then
+    `area_direction_pdf`) against the sampler: for each sampled direction the ray from the point meets the
+    light at the sampled distance with the pdf the sampler returned; and integrated over cells of the light
+    (the solid angle of fine points times their pdf) it predicts the sampler's counts per cell (χ²) and sums
+    to 1."""
+    light = area_light(shape, size_x, size_y)
+    ks = compiled(light)
+    a, b, point, pdf = area_sample(light, offset, seed=10)
+    u1, u2 = uniforms(10)
+    wx, wy, wz, _, distance, _ = sample_light(ks, 0, *(np.full(N, c) for c in point), u1, u2)
+    t = area_light_hit(ks, 0, *(np.full(N, c) for c in point), wx, wy, wz, np.inf)
+    np.testing.assert_allclose(t, distance, rtol=1e-9)
+    cos_light = -(np.array([wx, wy, wz]).T @ ks.lights.dir[0])
+    np.testing.assert_allclose(area_direction_pdf(ks, 0, *(np.full(N, c) for c in point), t, cos_light), pdf,
+                               rtol=1e-9)
+    fa, fb, share = fine_points(shape, 400)
+    q = CENTRE[:, None] + AXES[:, :2] @ np.array([0.5 * size_x * fa, 0.5 * size_y * fb])
+    v = q - point[:, None]
+    d = np.linalg.norm(v, axis=0)
+    w = v / d
+    count = fa.size
+    t = area_light_hit(ks, 0, *(np.full(count, c) for c in point), *w, np.inf)
+    cos_light = -(w.T @ ks.lights.dir[0])
+    area = size_x * size_y * (np.pi / 4 if shape == "ellipse" else 1.0)
+    solid_angle = share * area * cos_light / d**2
+    probability = area_direction_pdf(ks, 0, *(np.full(count, c) for c in point), t, cos_light) * solid_angle
+    assert probability.sum() == pytest.approx(1.0, abs=2e-3)
+    fine_cell, cell_count = cells(shape, fa, fb)
+    expected = np.bincount(fine_cell, weights=probability, minlength=cell_count)
+    sampled_cell, _ = cells(shape, a, b)
+    counts = np.bincount(sampled_cell, minlength=cell_count)
+    assert chi_square_pvalue(counts, expected / expected.sum()) > P_MIN
+
+
+@pytest.mark.parametrize("shape", ["rectangle", "ellipse"])
+def test_rays_pass_an_area_light_behind_it_beside_it_and_beyond_reach(shape):
+    """A ray meets only the emitting face (its local −Z side), inside the shape, before t_max."""
+    light = area_light(shape, 1.0, 0.6)
+    ks = compiled(light)
+    front, behind = CENTRE - 2.0 * AXES[:, 2], CENTRE + 2.0 * AXES[:, 2]
+    towards = AXES[:, 2]
+    assert area_light_hit(ks, 0, *front, *towards, np.inf) == pytest.approx(2.0)
+    assert area_light_hit(ks, 0, *front, *towards, 1.9) == np.inf  # beyond reach
+    assert area_light_hit(ks, 0, *behind, *-towards, np.inf) == np.inf  # its back
+    assert area_light_hit(ks, 0, *front, *-towards, np.inf) == np.inf  # away from it
+    corner = CENTRE + 0.45 * AXES[:, 0] + 0.27 * AXES[:, 1]  # inside the rectangle, outside the ellipse
+    hit = area_light_hit(ks, 0, *(corner - 2.0 * AXES[:, 2]), *towards, np.inf)
+    assert (hit == pytest.approx(2.0)) if shape == "rectangle" else hit == np.inf
+    beside = CENTRE + 0.55 * AXES[:, 0]
+    assert area_light_hit(ks, 0, *(beside - 2.0 * AXES[:, 2]), *towards, np.inf) == np.inf
 
 
 # ----------------------------------------------------------------------------- delta lights
