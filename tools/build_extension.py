@@ -41,16 +41,10 @@ PLATFORM_TAGS = {
 
 
 # Files of the bundled wheels that never run in Blender (patterns on paths inside a wheel; "*": every
-# wheel). Test suites; colour-science's coverage report (78 MB) and examples; the SciPy subpackages nothing
-# imports at run time (the tracer imports scipy.constants; colour-science imports scipy.optimize, for the
-# Jakob 2019 recovery's L-BFGS-B, and scipy.interpolate, and they import the rest kept), which the
-# packaging tests check by recovering spectra and rendering in the installed extension.
+# wheel): test suites; colour-science's coverage report (78 MB) and examples.
 LEFT_OUT = {
     "*": ("*/tests/*", "*/test/*"),
     "colour_science": ("colour/htmlcov/*", "colour/examples/*"),
-    "scipy": tuple(f"scipy/{package}/*" for package in ("cluster", "datasets", "differentiate", "fftpack",
-                                                        "integrate", "io", "misc", "ndimage", "odr", "signal",
-                                                        "stats")),
 }
 
 
