@@ -72,10 +72,10 @@ def main(argv=None) -> int:
         for name, size in by_distribution.most_common():
             print(f"  {name:28s} {size / MB:7.1f} | {wheels.get(name, 0) / MB:5.1f}")
         print(f"  {'(all wheels)':28s} {'':7s} | {wheels['(all wheels)'] / MB:5.1f}")
-        print(f"\nlargest sub-folders of site-packages (MB):")
+        print("\nlargest sub-folders of site-packages (MB):")
         for name, size in folders.most_common(args.top):
             print(f"  {name:40s} {size / MB:7.1f}")
-        print(f"\nlargest files (MB):")
+        print("\nlargest files (MB):")
         for path, size in sorted(files.items(), key=lambda item: -item[1])[: args.top]:
             print(f"  {path.relative_to(user / 'extensions').as_posix():70s} {size / MB:7.1f}")
     return 0
