@@ -48,7 +48,7 @@ def test_the_wheels_in_the_zip_leave_out_what_never_runs_and_list_what_they_hold
 
     sys.path.insert(0, str(ROOT / "tools"))
     try:
-        from build_extension import left_out
+        from build_extension import STRIPPED, gnu_strip, left_out
     finally:
         sys.path.remove(str(ROOT / "tools"))
     package = zipfile.ZipFile(extension_zip)
@@ -57,6 +57,9 @@ def test_the_wheels_in_the_zip_leave_out_what_never_runs_and_list_what_they_hold
         names = inner.namelist()
         distribution = Path(wheel).name.split("-")[0]
         assert not any(left_out(distribution, name) for name in names), wheel
+        for library in STRIPPED.get(distribution, ()) if gnu_strip() and PLATFORM == "linux-x64" else ():
+            original = zipfile.ZipFile(ROOT / "wheels" / Path(wheel).name).getinfo(library).file_size
+            assert inner.getinfo(library).file_size < original - 10 * MB, library  # symbol tables gone
         (record,) = [n for n in names if n.endswith(".dist-info/RECORD")]
         listed = [line.split(",")[0] for line in inner.read(record).decode().splitlines()]
         assert sorted(listed) == sorted(names), wheel
