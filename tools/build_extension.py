@@ -6,15 +6,16 @@ the manifest's [build] paths, so a build for a subset of platforms (`--platform 
 by the tests) carries only that platform's wheels. One zip per platform is written to --out.
 
 The zip carries slimmed copies of the wheels (`slim_wheel`, kept in wheels/slim-<rules digest>/): the
-files in LEFT_OUT, which never run in Blender, are left out, the rest is compressed with LZMA instead of
-Deflate, and RECORD lists what is left. Blender keeps the wheels beside the files it installs from them,
-so both count in the installed size.
+files in LEFT_OUT, which never run in Blender, are left out, the libraries in STRIPPED lose their symbol
+tables, the rest is compressed with LZMA instead of Deflate, and RECORD lists what is left. Blender keeps
+the wheels beside the files it installs from them, so both count in the installed size.
 """
 
 import argparse
 import base64
 import csv
 import fnmatch
+import functools
 import hashlib
 import importlib.util
 import io
@@ -41,17 +42,17 @@ PLATFORM_TAGS = {
 
 
 # Files of the bundled wheels that never run in Blender (patterns on paths inside a wheel; "*": every
-# wheel). Test suites; colour-science's coverage report (78 MB) and examples; the SciPy subpackages nothing
-# imports at run time (the tracer imports scipy.constants; colour-science imports scipy.optimize, for the
-# Jakob 2019 recovery's L-BFGS-B, and scipy.interpolate, and they import the rest kept), which the
-# packaging tests check by recovering spectra and rendering in the installed extension.
+# wheel): test suites; colour-science's coverage report (78 MB) and examples.
 LEFT_OUT = {
     "*": ("*/tests/*", "*/test/*"),
     "colour_science": ("colour/htmlcov/*", "colour/examples/*"),
-    "scipy": tuple(f"scipy/{package}/*" for package in ("cluster", "datasets", "differentiate", "fftpack",
-                                                        "integrate", "io", "misc", "ndimage", "odr", "signal",
-                                                        "stats")),
 }
+
+
+# Shared libraries of the bundled wheels whose symbol tables (names for debuggers and linkers, never read
+# at run time; the dynamic symbols that load them stay) are stripped with GNU strip where it is at hand
+# (Linux builds): libllvmlite.so's are 19 MB of its 179 MB.
+STRIPPED = {"llvmlite": ("llvmlite/binding/libllvmlite.so",)}
 
 
 def left_out(distribution: str, path: str) -> bool:
@@ -76,6 +77,8 @@ def slim_wheel(source: Path, folder: Path) -> Path:
             if info.filename == record or left_out(distribution, info.filename):
                 continue
             data = wheel.read(info)
+            if info.filename in STRIPPED.get(distribution, ()):
+                data = stripped(data)
             slim.writestr(info, data, zipfile.ZIP_LZMA)
             digest = base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=").decode()
             listing.writerow((info.filename, f"sha256={digest}", len(data)))
@@ -85,9 +88,31 @@ def slim_wheel(source: Path, folder: Path) -> Path:
     return target
 
 
+@functools.cache
+def gnu_strip() -> str | None:
+    """GNU strip (binutils), which strips ELF libraries on any machine it runs on; None without it."""
+    strip = shutil.which("strip")
+    version = subprocess.run([strip, "--version"], capture_output=True, text=True).stdout if strip else ""
+    return strip if "GNU" in version else None
+
+
+def stripped(data: bytes) -> bytes:
+    """An ELF shared library without its symbol tables (`strip --strip-unneeded`); as it is without GNU strip,
+    or when it is not ELF (Windows, macOS)."""
+    if gnu_strip() is None or not data.startswith(b"\x7fELF"):
+        return data
+    with tempfile.TemporaryDirectory(prefix="spectral_strip_") as tmp:
+        library = Path(tmp) / "library.so"
+        library.write_bytes(data)
+        subprocess.run([gnu_strip(), "--strip-unneeded", str(library)], check=True)
+        return library.read_bytes()
+
+
 def slim_folder() -> Path:
-    """Where the slimmed wheels are kept: one folder per version of LEFT_OUT."""
-    rules = hashlib.sha256(json.dumps(LEFT_OUT, sort_keys=True).encode()).hexdigest()[:12]
+    """Where the slimmed wheels are kept: one folder per version of LEFT_OUT and STRIPPED (and whether
+    this machine strips)."""
+    rules = json.dumps([LEFT_OUT, STRIPPED, gnu_strip() is not None], sort_keys=True)
+    rules = hashlib.sha256(rules.encode()).hexdigest()[:12]
     return ROOT / "wheels" / f"slim-{rules}"
 
 

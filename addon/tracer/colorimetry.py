@@ -14,8 +14,10 @@ the 1 nm node sum Σ_i w_i S(λ_i) Δλ (colour-science's "Integration") by w's 
 broad spectra, up to 1.5 % in X for a narrow band where x̄ is near its minimum (500–510 nm).
 """
 
+import sys
 import warnings
 from functools import lru_cache
+from unittest import mock
 
 import numpy as np
 
@@ -42,10 +44,17 @@ _WYMAN3_LOBES = (
 
 def colour_science():
     """The colour-science package, imported on first use: it takes about a second to import and warns
-    about plotting support (Matplotlib) that the tracer does not use."""
+    about plotting support (Matplotlib) that the tracer does not use.
+
+    The extension bundles no SciPy (what the tracer uses of colour-science runs without it). Without
+    SciPy, colour-science puts a mock `scipy` module into `sys.modules`, which would break a later
+    `import numba` (and any other add-on's SciPy check): the mock is taken out again."""
     with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message=".*Matplotlib.*")
+        warnings.filterwarnings("ignore", message=".*(Matplotlib|SciPy).*")
         import colour
+    for name in [name for name in sys.modules if name == "scipy" or name.startswith("scipy.")]:
+        if isinstance(sys.modules[name], mock.Mock):
+            del sys.modules[name]
     return colour
 
 

@@ -9,9 +9,9 @@ kernels interpolate (`kernels.media.blackbody_normalisation`).
 """
 
 import numpy as np
-import scipy.constants
 
 from . import colorimetry
+from .constants import STEFAN_BOLTZMANN
 from .planck import planck_radiance
 from .wavelengths import GRID
 
@@ -23,7 +23,7 @@ TABLE_NODES = 1024
 
 def stefan_boltzmann_radiance(kelvin):
     """σT⁴/π: a black body's radiance over all wavelengths, W·m⁻²·sr⁻¹."""
-    return scipy.constants.Stefan_Boltzmann * np.asarray(kelvin, dtype=np.float64) ** 4 / np.pi
+    return STEFAN_BOLTZMANN * np.asarray(kelvin, dtype=np.float64) ** 4 / np.pi
 
 
 def normalisation_table(cmf: str) -> tuple[np.ndarray, np.ndarray]:

@@ -5,13 +5,13 @@ validated temperatures) and the kernels (per-voxel temperatures, compiled by Num
 """
 
 import numpy as np
-import scipy.constants
 
+from .constants import BOLTZMANN, PLANCK, SPEED_OF_LIGHT
 from .shared_math import shared
 
 NANOMETRE = 1e-9  # metres
-FIRST_RADIATION_CONSTANT = 2 * scipy.constants.h * scipy.constants.c**2  # 2hc², W·m²·sr⁻¹
-SECOND_RADIATION_CONSTANT = scipy.constants.h * scipy.constants.c / scipy.constants.k  # hc/k, m·K
+FIRST_RADIATION_CONSTANT = 2 * PLANCK * SPEED_OF_LIGHT**2  # 2hc², W·m²·sr⁻¹
+SECOND_RADIATION_CONSTANT = PLANCK * SPEED_OF_LIGHT / BOLTZMANN  # hc/k, m·K
 
 
 @shared

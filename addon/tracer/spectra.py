@@ -16,9 +16,9 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-import scipy.constants
 
-from . import colorimetry
+from . import colorimetry, jakob2019
+from .constants import WIEN
 from .planck import planck_radiance
 from .checks import shown
 from .errors import SpectralError
@@ -57,7 +57,6 @@ RGB_METHODS = {"jakob2019": "Jakob 2019", "otsu2018": "Otsu 2018"}
 CSV_UNITS = {"nm": 1.0, "um": 1e3, "µm": 1e3, "μm": 1e3, "A": 0.1, "Å": 0.1}
 
 _NM = 1e-9  # metres
-_WIEN_B = scipy.constants.Wien  # m·K
 
 
 class NonFiniteSpectrum(SpectralError):
@@ -226,7 +225,7 @@ def planck(lam, temperature):
 def blackbody(temperature: float) -> Spectrum:
     """Shape of a black body's spectral radiance at `temperature` kelvin, scaled so that its maximum over
     all wavelengths (at Wien's λ = b/T, possibly off the grid) is 1."""
-    peak_nm = _WIEN_B / _kelvin(temperature) / _NM
+    peak_nm = WIEN / _kelvin(temperature) / _NM
     return Spectrum(planck(GRID, temperature) / planck(peak_nm, temperature))
 
 
@@ -263,8 +262,8 @@ def _rgb_triple(rgb) -> tuple[float, float, float]:
 def from_rgb(rgb, method: str = "jakob2019") -> Spectrum:
     """A smooth reflectance spectrum in [0, 1] whose colour under D65 is `rgb` (linear Rec.709, in [0, 1]).
 
-    `method` (see RGB_METHODS): "jakob2019" (Jakob & Hanika 2019 sigmoid polynomial) or "otsu2018", both
-    from colour-science's `colour.recovery`. The fit spans 360–830 nm (Otsu: 380–730 nm); beyond it the
+    `method` (see RGB_METHODS): "jakob2019" (Jakob & Hanika 2019 sigmoid polynomial, `jakob2019`) or
+    "otsu2018" (colour-science's `colour.recovery`). The fit spans 360–830 nm (Otsu: 380–730 nm); beyond it the
     value at its end is held."""
     if method not in RGB_METHODS:
         raise SpectralError(f"unknown RGB-to-spectrum method {method!r}; choose one of {', '.join(RGB_METHODS)}")
@@ -273,14 +272,20 @@ def from_rgb(rgb, method: str = "jakob2019") -> Spectrum:
 
 @lru_cache(maxsize=1024)
 def _from_rgb(rgb: tuple[float, float, float], method: str) -> Spectrum:
-    colour = colorimetry.colour_science()
     observer = colorimetry.cie1931_observer()
-    d65 = colour.SpectralDistribution(illuminant("D65")(observer.wavelengths), observer.wavelengths)
+    d65 = illuminant("D65")(observer.wavelengths)
+    xyz = colorimetry.rgb_to_xyz(rgb, "rec709")
+    if method == "jakob2019":
+        coefficients, _ = jakob2019.fit(xyz, observer.values.T, d65)
+        lo, hi = observer.wavelengths[0], observer.wavelengths[-1]
+        values = jakob2019.reflectance(coefficients, np.clip((GRID - lo) / (hi - lo), 0.0, 1.0))
+        return Spectrum(np.clip(values, 0.0, 1.0))
+    colour = colorimetry.colour_science()
     with warnings.catch_warnings():
         # Otsu 2018 resamples to its dataset's 380–730 nm, 10 nm shape and warns about it on every call.
         warnings.simplefilter("ignore", colour.utilities.ColourRuntimeWarning)
-        recovered = colour.XYZ_to_sd(colorimetry.rgb_to_xyz(rgb, "rec709"), method=RGB_METHODS[method],
-                                     cmfs=observer, illuminant=d65)
+        recovered = colour.XYZ_to_sd(xyz, method=RGB_METHODS[method], cmfs=observer,
+                                     illuminant=colour.SpectralDistribution(d65, observer.wavelengths))
     return Spectrum(np.clip(np.interp(GRID, recovered.wavelengths, recovered.values), 0.0, 1.0))
 
 
