@@ -134,8 +134,9 @@ def test_the_volume_with_a_holdout_ground_composited_over_a_cycles_plate_is_the_
     """An emissive, absorbing cube high above a grey ground under a low sun (its shadow falls off the ground),
     seen from above: this engine's render of it with the ground as holdout and Film ▸ Transparent, put "over"
     Cycles' render of the ground alone, is this engine's render of the whole scene. What the composite cannot
-    have, the cube's own light on the ground (the cube subtends 0.03 sr there: ≤ 0.4 % of the ground's
-    brightness), is admitted as a relative allowance of 1 % per block."""
+    have, the cube's own light on the ground (it subtends 0.03 sr there at a radiance of about Y 0.2, against the
+    sun's irradiance of 1.5: about 0.5 % more light below it), is admitted as a relative allowance of 1 % per
+    block."""
     factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     bpy.data.objects.remove(bpy.data.objects["Light"])
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))

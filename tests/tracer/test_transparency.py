@@ -71,7 +71,8 @@ def test_alpha_of_a_grey_slab_is_one_minus_its_transmittance(backend):
 def test_alpha_of_a_chromatic_slab_is_one_minus_its_luminance_weighted_transmittance(bands):
     """Each band estimates its part of the spectrum; the bands' transparencies add up to the whole."""
     expected = 1.0 - luminance_mean(np.exp(-CHROMATIC.values))
-    assert abs(expected - (1.0 - np.exp(-CHROMATIC.values).mean())) > 0.02  # the weighting matters here
+    uniform = 1.0 - np.exp(-CHROMATIC.values)[GRID >= 360.0].mean()  # a plain mean over the camera's 360–830 nm
+    assert abs(expected - uniform) > 0.05  # the weighting matters here
     assert_alpha(render(scene([slab(CHROMATIC)], bands=bands)).film, expected)
 
 
