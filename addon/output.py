@@ -35,8 +35,8 @@ def blender_rows(image: np.ndarray) -> np.ndarray:
 
 
 def with_alpha(rgb: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
-    """RGB → RGBA; `alpha` (height, width) defaults to 1 (a volume render covers the whole frame, its
-    background included)."""
+    """RGB → RGBA; `alpha` (height, width) defaults to 1 (the film's alpha is 1 everywhere unless Film ▸
+    Transparent is on or a holdout is seen, `Film.alpha`)."""
     alpha = np.ones(rgb.shape[:2]) if alpha is None else alpha
     return np.concatenate([rgb, alpha[..., None]], axis=2)
 
@@ -62,7 +62,7 @@ def passes(film, region: Region | None = None, denoised: bool = False) -> Passes
     """The film's passes, placed at `region` in a frame of zeros when one is given; with `denoised`, the RGB
     (Combined) image is denoised (addon/tracer/denoise.py) while XYZ and variance stay as rendered."""
     rgb = denoise.denoised_rgb(film) if denoised else film.rgb()
-    rendered = Passes(film.xyz, rgb, film.variance, np.ones((film.height, film.width)))
+    rendered = Passes(film.xyz, rgb, film.variance, film.alpha)
     if region is None:
         return rendered
     top = region.full_height - region.y - region.height  # Region counts rows from the bottom
@@ -80,15 +80,16 @@ def render_result(result, film, preview: bool = False) -> None:
     preview (an update during the render) XYZ and XYZ Variance (the variance costs most to convert:
     0.2–0.5 s at 1920×1080, time a cancel would wait). Pixels go in with `foreach_set`: assigning `rect`
     took 7–10 s per pass at 1920×1080. The engine then calls `update_result`."""
-    render_combined(result, film.rgb())
+    render_combined(result, film.rgb(), film.alpha)
     if not preview:
         _render_pass(result, XYZ, film.xyz)
         _render_pass(result, VARIANCE, film.variance)
 
 
-def render_combined(result, rgb: np.ndarray) -> None:
-    """Linear Rec.709 `rgb` (height, width, 3; top row first) → the Render Result's Combined pass (alpha 1)."""
-    _render_pass(result, COMBINED, with_alpha(rgb))
+def render_combined(result, rgb: np.ndarray, alpha: np.ndarray) -> None:
+    """Linear Rec.709 `rgb` (height, width, 3; top row first), premultiplied by `alpha` (height, width) → the
+    Render Result's Combined pass (RGBA: the Render Layers node's Image and Alpha)."""
+    _render_pass(result, COMBINED, with_alpha(rgb, alpha))
 
 
 def _render_pass(result, name: str, image: np.ndarray) -> None:

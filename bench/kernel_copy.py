@@ -63,11 +63,12 @@ class CopyRenderer:
         seconds = 0.0
         for size in pass_sizes(spp, first=min(16, spp)):
             sum_xyz, sum_sq = np.zeros((height, width, 3)), np.zeros((height, width, 3))
+            sum_transparent = np.zeros((height, width))
             start = time.perf_counter()
             self.module.render_tile(self.kernel_scene, 0, 0, width, height, self.next_sample,
-                                    self.next_sample + size, self.seed, 0, sum_xyz, sum_sq)
+                                    self.next_sample + size, self.seed, 0, sum_xyz, sum_sq, sum_transparent)
             seconds += time.perf_counter() - start
-            film.add(0, 0, 0, sum_xyz, sum_sq, size)
+            film.add(0, 0, 0, sum_xyz, sum_sq, size, sum_transparent)
             self.next_sample += size
         return Image(film.xyz, film.variance, spp, seconds)
 

@@ -164,7 +164,8 @@ def _render_frame(scene, frame: int, args, written: list) -> str:
     images = output.passes(result.film, region, denoised)
     outputs = [output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
     if args.png is not None:
-        outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure))
+        alpha = images.alpha if scene.render.film_transparent else None
+        outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure, alpha))
     paths = image_io.write_all(outputs)
     written += paths
     spp = scene.spectral.samples if args.spp is None else args.spp

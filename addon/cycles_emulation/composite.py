@@ -3,7 +3,7 @@
 Each render is made twice with different seeds (two halves of the samples); their mean is the estimate
 and (a − b)²/4 per pixel an unbiased estimate of its variance (one degree of freedom, so noisy per pixel,
 but exact on average), summed over renders since they are independent. The film offers what the tracer's
-Film offers to the outputs: `xyz`, `variance` and `rgb()`.
+Film offers to the outputs: `xyz`, `variance`, `rgb()` and `alpha`.
 """
 
 import numpy as np
@@ -30,3 +30,8 @@ class CompositeFilm:
 
     def rgb(self, space: str = "rec709") -> np.ndarray:
         return colorimetry.xyz_to_rgb(self.xyz, space)
+
+    @property
+    def alpha(self) -> np.ndarray:
+        """1 everywhere: Cycles renders the bands with Film ▸ Transparent off (`setup.cycles_settings`)."""
+        return np.ones((self.height, self.width))

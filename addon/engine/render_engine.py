@@ -178,7 +178,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
         if not denoised or self.is_preview or self.test_break():
             return
         self._show_stats("Denoising")
-        output.render_combined(result, denoised_rgb(film))
+        output.render_combined(result, denoised_rgb(film), film.alpha)
         self.update_result(result)
 
     def _write(self, result, film, preview: bool = False) -> None:

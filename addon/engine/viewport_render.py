@@ -96,7 +96,7 @@ def view_pixels(film, width: int, height: int, denoised: bool = False) -> np.nda
     """Film → (height, width, 4) float32 linear Rec.709 RGBA, bottom row first (as GPU textures), scaled
     up to width × height by nearest neighbour; with `denoised`, denoised first."""
     rgb = denoised_rgb(film, DENOISE_QUALITY) if denoised else film.rgb()
-    pixels = blender_rows(with_alpha(rgb)).reshape(film.height, film.width, 4)
+    pixels = blender_rows(with_alpha(rgb, film.alpha)).reshape(film.height, film.width, 4)
     if (film.width, film.height) == (width, height):
         return pixels
     rows = np.arange(height) * film.height // height

@@ -44,7 +44,7 @@ from .meshes import voxelise
 from ..nodes.notes import Notes
 from .volume_fields import VolumeFields
 from .volumes import volume_grids
-from .surfaces import export_surfaces
+from .surfaces import export_surfaces, held_out
 from .world import export_world
 
 
@@ -63,7 +63,7 @@ def render_settings(scene) -> RenderSettings:
                           wavelength_sampling=s.wavelength_sampling, wavelengths_per_path=int(s.wavelengths_per_path),
                           lambda_min=s.lambda_min, lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf,
                           backend=s.backend, noise_threshold=s.adaptive_threshold if s.use_adaptive_sampling else 0.0,
-                          min_samples=s.adaptive_min_samples)
+                          min_samples=s.adaptive_min_samples, transparent=bool(scene.render.film_transparent))
 
 
 def unsupported_settings(scene) -> list[str]:
@@ -80,13 +80,16 @@ def _object_parts(instance, depsgraph, volume_owners, originals: bool, notes: No
     obj, matrix = instance.object, instance.matrix_world
     is_volume = obj.type == "VOLUME" or (obj.type == "MESH" and fluid_domain(obj) is not None)
     material = volume_material(obj, depsgraph) if is_volume or obj.type == "MESH" else None
+    holdout = held_out(instance, depsgraph.view_layer, notes)
+    if holdout and material is not None:
+        notes.add(f"object {obj.name!r}: Holdout of a volume not rendered (the volume renders as it is)")
     if material is None:
         if is_volume:
             names = [material.name for material in materials(obj, depsgraph)]
             notes.leave_out("volume without a volume material", obj.name + (f" ({', '.join(names)})" if names else ""),
                             "volumes without a volume material")
             return [], []
-        return [], export_surfaces(obj, matrix, depsgraph, notes)
+        return [], export_surfaces(obj, matrix, depsgraph, notes, holdout)
     if obj.type == "MESH" and not is_volume and obj.original in volume_owners and not obj.data.polygons:
         return [], []  # Geometry Nodes turned the mesh into a volume: only that volume renders
     material = material.original if originals else material

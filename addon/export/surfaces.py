@@ -6,7 +6,9 @@ renderers mesh them (`Object.to_mesh`); hair curves, point clouds and Grease Pen
 rendered. What a material renders as is `nodes.surface.read_surface_shader`;
 the triangles of a slot whose material has nothing linked to its Surface are see-through in Cycles and
 are left out, as are meshes without faces. A surface is named after its object, and after its material too
-where the object has several, so that errors and the report name Blender's data.
+where the object has several, so that errors and the report name Blender's data. A surface holds out
+(`Surface.holdout`) where its material has a Holdout closure or its object is a holdout in the view layer
+(`held_out`: Object ▸ Visibility ▸ Holdout, or a collection set to Holdout), as in Cycles.
 """
 
 import numpy as np
@@ -35,15 +37,27 @@ def _triangles(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return vertices.reshape(-1, 3).astype(np.float64), triangles.reshape(-1, 3), slots
 
 
-def _surface(name, vertices, triangles, look) -> Surface:
+def _surface(name, vertices, triangles, look, holdout: bool) -> Surface:
     used, compact = np.unique(triangles, return_inverse=True)
     return Surface(name=name, vertices=vertices[used], triangles=compact.reshape(-1, 3).astype(np.int32),
                    reflectance=Spectrum(look.reflectance),
-                   emission=Spectrum(look.emission) if look.emits() else None)
+                   emission=Spectrum(look.emission) if look.emits() else None, holdout=holdout or look.holdout)
 
 
-def export_surfaces(obj, matrix_world, depsgraph, notes: Notes) -> list[Surface]:
-    """The surfaces of one evaluated object instance at `matrix_world` ([] for a type with no faces)."""
+def held_out(instance, view_layer, notes: Notes) -> bool:
+    """Whether Cycles renders a depsgraph instance as a holdout: its object's (or for an instance, its
+    instancer's) Holdout property, or a collection of the view layer set to Holdout. A collection set to
+    Indirect Only (hidden from the camera only) is named in `notes`: its objects render as ordinary ones."""
+    owner = (instance.parent if instance.is_instance and instance.parent is not None else instance.object).original
+    holdout = bool(owner.is_holdout or owner.holdout_get(view_layer=view_layer))
+    if not holdout and owner.indirect_only_get(view_layer=view_layer):
+        notes.add(f"object {owner.name!r}: Indirect Only (its collection's) rendered as seen by the camera too")
+    return holdout
+
+
+def export_surfaces(obj, matrix_world, depsgraph, notes: Notes, holdout: bool = False) -> list[Surface]:
+    """The surfaces of one evaluated object instance at `matrix_world` ([] for a type with no faces); with
+    `holdout` (`held_out`), all of them hold out."""
     if obj.type in UNRENDERED_TYPES:
         notes.leave_out(UNRENDERED_TYPES[obj.type][0], obj.name, UNRENDERED_TYPES[obj.type][1])
     if obj.type not in MESHED_TYPES:
@@ -68,5 +82,5 @@ def export_surfaces(obj, matrix_world, depsgraph, notes: Notes) -> list[Surface]
         if look is None:
             continue
         name = obj.name + (f" ▸ {material.name if material is not None else 'no material'}" if several else "")
-        surfaces.append(_surface(name, vertices, triangles[slots == index], look))
+        surfaces.append(_surface(name, vertices, triangles[slots == index], look, holdout))
     return surfaces

@@ -7,6 +7,9 @@ The tracer's surfaces reflect diffusely and may emit (`tracer.scene.Surface`). F
   specular layer, and Metallic, Transmission, Coat, Sheen and Subsurface where their weights are above 0,
   are not rendered (noted, once per material);
 - Emission: Color × Strength, emitted on both sides as in Cycles (shadeless: a camera sees the colour);
+- Holdout: a hole for camera rays (`tracer.scene.Surface.holdout`), black (no reflectance, no emission) for
+  rays after a scattering, as Cycles' holdout closure; mixed with other closures, Cycles cuts a partial hole,
+  which the tracer renders as a whole one (noted);
 - Add Shader adds, Mix Shader weighs by (1 − Fac, Fac); any other BSDF renders as a diffuse surface of its
   Color (noted).
 A material with nothing linked to its Surface is see-through in Cycles (a volume's box): `None`. An empty
@@ -40,6 +43,7 @@ class SurfaceLook:
 
     reflectance: np.ndarray
     emission: np.ndarray
+    holdout: bool = False  # the material holds out (its Holdout closures' weight, above 0)
 
     def emits(self) -> bool:
         return bool(np.any(self.emission > 0))
@@ -74,6 +78,8 @@ def _closure(node, owner, notes, weight, look):
         strength = max(float(number(node, "Strength", owner, notes)), 0.0)
         if strength > 0:
             look["emission"] += weight * strength * emission_spectrum(colour(node, "Color", owner, notes)).values
+    elif kind == "ShaderNodeHoldout":
+        look["holdout"] += weight
     elif kind == "ShaderNodeAddShader":
         for socket in node.inputs:
             _follow(socket, owner, notes, weight, look)
@@ -103,6 +109,9 @@ def read_surface_shader(material, notes: Notes) -> SurfaceLook | None:
     if found is None:
         return None
     zeros = np.zeros(GRID.size)
-    look = {"reflectance": zeros.copy(), "emission": zeros.copy()}
-    _closure(found[0], f"material {material.name!r}", notes, 1.0, look)
-    return SurfaceLook(np.clip(look["reflectance"], 0.0, 1.0), look["emission"])
+    look = {"reflectance": zeros.copy(), "emission": zeros.copy(), "holdout": 0.0}
+    owner = f"material {material.name!r}"
+    _closure(found[0], owner, notes, 1.0, look)
+    if 0.0 < look["holdout"] < 1.0:
+        notes.add(f"{owner}: Holdout mixed in at weight {look['holdout']:.3g} rendered as a whole holdout")
+    return SurfaceLook(np.clip(look["reflectance"], 0.0, 1.0), look["emission"], look["holdout"] > 0.0)

@@ -6,7 +6,9 @@ judged on a perceptual rather than a relative scale), and a pixel is done when t
 threshold. The standard errors come from the film's own per-pixel variance (`Film.variance`, in XYZ,
 taken to linear Rec.709 with the channels treated as independent). A pixel keeps sampling while any of its
 eight neighbours does, so that a noisy region's edge is not left behind. No pixel is judged before it has
-the minimum number of samples, so that a rare bright path has had its chance to show.
+the minimum number of samples, so that a rare bright path has had its chance to show. Alpha (Film ▸
+Transparent) is not judged, as in Cycles, whose measure is on the colour only: a pixel that stops early has
+its alpha from the samples it took (it converges with them, and a noisy edge of a volume is noisy in colour too).
 """
 
 import numpy as np

@@ -58,9 +58,10 @@ def medium(density: Grid, scale: float = 1.0, *, name: str = "medium", extinctio
 
 
 def parallelogram(corner, edge_u, edge_v, subdivisions: int = 1, *, reflectance=1.0, emission=None,
-                  name: str = "surface") -> Surface:
+                  name: str = "surface", holdout: bool = False) -> Surface:
     """A flat surface spanning corner + a·edge_u + b·edge_v for a, b in [0, 1], cut into `subdivisions`² cells
-    of two triangles each; `reflectance` and `emission` (None: not a light) are numbers or spectra."""
+    of two triangles each; `reflectance` and `emission` (None: not a light) are numbers or spectra; `holdout`
+    as `Surface.holdout`."""
     n = int(subdivisions)
     a, b = np.meshgrid(np.linspace(0.0, 1.0, n + 1), np.linspace(0.0, 1.0, n + 1), indexing="ij")
     vertices = (np.asarray(corner, dtype=np.float64) + a.reshape(-1, 1) * np.asarray(edge_u, dtype=np.float64)
@@ -70,7 +71,7 @@ def parallelogram(corner, edge_u, edge_v, subdivisions: int = 1, *, reflectance=
     triangles = np.concatenate([np.stack([first, first + n + 1, first + n + 2], axis=1),
                                 np.stack([first, first + n + 2, first + 1], axis=1)])
     return Surface(name=name, vertices=vertices, triangles=triangles, reflectance=as_spectrum(reflectance),
-                   emission=None if emission is None else as_spectrum(emission))
+                   emission=None if emission is None else as_spectrum(emission), holdout=holdout)
 
 
 def direction(elevation: float, azimuth: float = 0.0) -> np.ndarray:

@@ -10,6 +10,7 @@ exits 0 whatever becomes of its messages: stdout and stderr may be closed, full 
 """
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -93,6 +94,9 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
     render.add_argument("--seed", type=int, help="random seed (default: the scene's)")
     render.add_argument("--backend", choices=BACKENDS, help="kernel backend (default: the scene's)")
+    render.add_argument("--transparent", action="store_true",
+                        help="Film ▸ Transparent: camera rays do not see the background; the EXR's and PNG's alpha "
+                             "is 1 − the share they saw (default: the scene's render.transparent)")
     render.add_argument("--threads", type=int, help="worker threads for the numba backend")
     render.add_argument("--stats", type=Path, help="write timing, samples per second and mean XYZ as JSON")
     render.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -136,6 +140,8 @@ def _render(args, written: list) -> int:
 
     _check_options(args)
     scene = load_scene(args.scene)
+    if args.transparent:
+        scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, transparent=True))
     progress = None if args.quiet else ProgressBar()
     if args.scheduler is not None or args.workers is not None:
         from . import distributed
@@ -148,9 +154,10 @@ def _render(args, written: list) -> int:
         result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend, threads=args.threads,
                         progress=progress, notice=progress and progress.notice)
     film = result.film
-    outputs = [image_io.exr(args.out, film.xyz, film.rgb(), film.variance)]
+    alpha = film.alpha if scene.settings.transparent else None
+    outputs = [image_io.exr(args.out, film.xyz, film.rgb(), film.variance, alpha)]
     if args.png:
-        outputs.append(image_io.png(args.png, film.rgb()))
+        outputs.append(image_io.png(args.png, film.rgb(), alpha=alpha))
     if args.npy:
         outputs.append(image_io.npy(args.npy, film.xyz))
     if args.stats:

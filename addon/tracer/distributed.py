@@ -109,12 +109,13 @@ class PassMerger:
     def __init__(self, film: Film, sizes: list[int], tiles: list[tuple[int, int, int, int]]):
         self.film, self.sizes, self.tiles = film, list(sizes), list(tiles)
         self.next_pass = [0] * film.bands
-        self.waiting: dict[tuple[int, int], dict[int, tuple[np.ndarray, np.ndarray]]] = {}
+        self.waiting: dict[tuple[int, int], dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
 
-    def add(self, unit: Unit, sum_xyz: np.ndarray, sum_sq: np.ndarray) -> None:
+    def add(self, unit: Unit, sum_xyz: np.ndarray, sum_sq: np.ndarray, sum_transparent: np.ndarray) -> None:
         if unit.pass_index < self.next_pass[unit.band]:
             raise ValueError(f"pass {unit.pass_index} of band {unit.band} was already added")
-        self.waiting.setdefault((unit.band, unit.pass_index), {})[unit.tile_index] = (sum_xyz, sum_sq)
+        arrived = self.waiting.setdefault((unit.band, unit.pass_index), {})
+        arrived[unit.tile_index] = (sum_xyz, sum_sq, sum_transparent)
         band = unit.band
         while self.next_pass[band] < len(self.sizes):
             parts = self.waiting.get((band, self.next_pass[band]))
@@ -123,7 +124,8 @@ class PassMerger:
             del self.waiting[(band, self.next_pass[band])]
             for tile_index in sorted(parts):
                 x0, y0, _, _ = self.tiles[tile_index]
-                self.film.add(band, y0, x0, *parts[tile_index], self.sizes[self.next_pass[band]])
+                xyz, squares, transparent = parts[tile_index]
+                self.film.add(band, y0, x0, xyz, squares, self.sizes[self.next_pass[band]], transparent)
             self.next_pass[band] += 1
 
     @property
@@ -187,6 +189,7 @@ class TaskResult(NamedTuple):
     worker: str
     sum_xyz: np.ndarray | None
     sum_sq: np.ndarray | None
+    sum_transparent: np.ndarray | None
 
 
 def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
@@ -196,7 +199,7 @@ def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile
     Thread counts do not change the result."""
     ran = fingerprint(environment(), scene_data.digest(), seed, backend)
     if ran != expected:
-        return TaskResult(ran, _worker_address(), None, None)
+        return TaskResult(ran, _worker_address(), None, None, None)
     if backend == "numba":
         from .kernels import numba_backend
 
@@ -543,7 +546,7 @@ class RenderFarm:
                                 raise self._refused_error(refused)
                             completed.add(submit(unit, attempt + 1, self._not_refused(refused)))
                             continue
-                        merger.add(unit, result.sum_xyz, result.sum_sq)
+                        merger.add(unit, result.sum_xyz, result.sum_sq, result.sum_transparent)
                         work_done += unit.pixel_samples
                         done += 1
                     if progress is not None:

@@ -1,8 +1,12 @@
-"""The film: per-pixel XYZ sums and squared sums for each wavelength band, and what they estimate.
+"""The film: per-pixel XYZ sums and squared sums and transparency sums for each wavelength band, and what
+they estimate.
 
 Each band is an independent estimator of its part of the spectrum; the pixel's XYZ is the sum over
 bands of each band's sample mean, and its variance (of that estimate) the sum of the bands' variances
-of the mean. Accumulators merge by addition, so work split over passes, tiles or machines combines
+of the mean. Its alpha is 1 − the sum over bands of each band's mean transparency (`kernels/transparency.py`:
+the share of the background its camera paths saw, 0 without Film ▸ Transparent, so alpha 1); the colour is
+premultiplied by it, as Cycles' is.
+Accumulators merge by addition, so work split over passes, tiles or machines combines
 exactly (up to floating-point summation order). Samples are counted per pixel, so a film that holds
 part of a pass (some tiles done, others not) is still a consistent image.
 """
@@ -14,10 +18,10 @@ from .checks import byte_size, shown
 from .errors import SpectralError
 from .grids import available_memory
 
-# float64 Σ XYZ and Σ XYZ² and an int64 sample count per band, plus a tile's accumulators and the XYZ,
-# RGB and variance images made at the end.
-ACCUMULATOR_BYTES = 2 * 3 * 8 + 8
-OUTPUT_BYTES = 3 * 3 * 8
+# float64 Σ XYZ, Σ XYZ² and Σ transparency and an int64 sample count per band, plus a tile's accumulators and
+# the XYZ, RGB, variance and alpha images made at the end.
+ACCUMULATOR_BYTES = 2 * 3 * 8 + 8 + 8
+OUTPUT_BYTES = 3 * 3 * 8 + 8
 
 
 def film_bytes(width: int, height: int, bands: int = 1) -> int:
@@ -40,13 +44,18 @@ class Film:
         self.width, self.height, self.bands = int(width), int(height), int(bands)
         self.sum_xyz = np.zeros((self.bands, self.height, self.width, 3))
         self.sum_sq = np.zeros_like(self.sum_xyz)
+        self.sum_transparent = np.zeros((self.bands, self.height, self.width))
         self.pixel_samples = np.zeros((self.bands, self.height, self.width), dtype=np.int64)
 
-    def add(self, band: int, y0: int, x0: int, sum_xyz: np.ndarray, sum_sq: np.ndarray, samples: int) -> None:
-        """Add a tile's accumulators (rows y0…, columns x0…) over `samples` samples per pixel of `band`."""
+    def add(self, band: int, y0: int, x0: int, sum_xyz: np.ndarray, sum_sq: np.ndarray, samples: int,
+            sum_transparent: np.ndarray | None = None) -> None:
+        """Add a tile's accumulators (rows y0…, columns x0…) over `samples` samples per pixel of `band`
+        (`sum_transparent` None: samples that saw no background)."""
         h, w = sum_xyz.shape[:2]
         self.sum_xyz[band, y0:y0 + h, x0:x0 + w] += sum_xyz
         self.sum_sq[band, y0:y0 + h, x0:x0 + w] += sum_sq
+        if sum_transparent is not None:
+            self.sum_transparent[band, y0:y0 + h, x0:x0 + w] += sum_transparent
         self.pixel_samples[band, y0:y0 + h, x0:x0 + w] += samples
 
     @property
@@ -59,6 +68,12 @@ class Film:
         """Estimated XYZ per pixel, shape (height, width, 3)."""
         counts = np.maximum(self.pixel_samples, 1)[..., None]
         return (self.sum_xyz / counts).sum(axis=0)
+
+    @property
+    def alpha(self) -> np.ndarray:
+        """Estimated alpha per pixel, shape (height, width): 1 − the mean transparency, summed over bands (1
+        where no sample has arrived). Not clipped: a stochastic estimate may stray past 0 or 1 by its noise."""
+        return 1.0 - (self.sum_transparent / np.maximum(self.pixel_samples, 1)).sum(axis=0)
 
     @property
     def mean_xyz(self) -> np.ndarray:

@@ -168,11 +168,16 @@ def _new_file_mode() -> int:
     return 0o666 & ~umask
 
 
-def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pixel_type: str) -> None:
+def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pixel_type: str,
+                straight_alpha: bool = False) -> None:
+    """Write `pixels` as they are; `straight_alpha`: their colour is already divided by alpha (OpenImageIO would
+    otherwise divide it again for a format whose alpha is straight, as PNG's)."""
     oiio = _open_image_io()
     height, width, channels = pixels.shape
     spec = oiio.ImageSpec(width, height, channels, pixel_type)
     spec.channelnames = tuple(channel_names)
+    if straight_alpha:
+        spec.attribute("oiio:UnassociatedAlpha", 1)
     if filename.endswith(".exr"):
         spec.attribute("compression", "zip")
     output = oiio.ImageOutput.create(filename)
@@ -239,15 +244,24 @@ def srgb_display(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
     return np.round(encoded * 255).astype(np.uint8)
 
 
-def png(path, rgb: np.ndarray, exposure: float = 0.0) -> Output:
-    """PNG preview of linear Rec.709 through the Standard (sRGB) view transform."""
-    pixels = srgb_display(finite(rgb, path), exposure)
-    return Output(check_destination(path, ".png"), lambda name: _write_oiio(name, pixels, ["R", "G", "B"], "uint8"))
+def png(path, rgb: np.ndarray, exposure: float = 0.0, alpha: np.ndarray | None = None) -> Output:
+    """PNG preview of linear Rec.709 through the Standard (sRGB) view transform; with `alpha` (height, width),
+    an RGBA PNG: the colour, premultiplied in a render, is divided by alpha first (PNG's alpha is straight, as
+    Blender saves it), and alpha is clipped to [0, 1]."""
+    rgb = finite(rgb, path)
+    if alpha is None:
+        return Output(check_destination(path, ".png"),
+                      lambda name: _write_oiio(name, srgb_display(rgb, exposure), ["R", "G", "B"], "uint8"))
+    alpha = np.clip(finite(alpha, path), 0.0, 1.0)[..., None]
+    straight = np.divide(rgb, alpha, out=np.zeros_like(rgb), where=alpha > 0.0)
+    pixels = np.concatenate([srgb_display(straight, exposure), np.round(alpha * 255).astype(np.uint8)], axis=2)
+    return Output(check_destination(path, ".png"),
+                  lambda name: _write_oiio(name, pixels, ["R", "G", "B", "A"], "uint8", straight_alpha=True))
 
 
-def write_png(path, rgb: np.ndarray, exposure: float = 0.0) -> Path:
+def write_png(path, rgb: np.ndarray, exposure: float = 0.0, alpha: np.ndarray | None = None) -> Path:
     """Write `png(...)` on its own."""
-    return write_all([png(path, rgb, exposure)])[0]
+    return write_all([png(path, rgb, exposure, alpha)])[0]
 
 
 def npy(path, xyz: np.ndarray) -> Output:

@@ -268,7 +268,8 @@ def _surface_arrays(surfaces: tuple[Surface, ...], first_light: int) -> tuple[Ke
         corner=corner, edge1=edge1, edge2=edge2,
         normal=cross / np.maximum(double_area, np.finfo(np.float64).tiny)[:, None], surface=owner,
         node_bounds=bounds, node_first=first.astype(np.int64), node_count=node_count.astype(np.int64),
-        reflectance=reflectance, light=light, of_light=of_light, area=area,
+        reflectance=reflectance, light=light, holdout=np.array([bool(s.holdout) for s in surfaces], dtype=bool),
+        of_light=of_light, area=area,
         emitter_cdf=np.concatenate(cdfs), emitter_triangle=np.concatenate(bins), emitter_offset=emitter_offset,
         emitter_count=emitter_count)
     return kernel_surfaces, emissive
@@ -342,6 +343,15 @@ def camera_extent(camera) -> np.ndarray:
     return np.array([extent_x, extent_y, camera.shift_x * span, camera.shift_y * span])
 
 
+def white_y(settings) -> float:
+    """Y of a unit equal-energy radiance over the camera's wavelengths (`default_band`): the scale of a path's
+    transparency (`kernels/transparency.py`), the integral of the XYZ weights' ȳ, linear between grid nodes."""
+    lo, hi = default_band(settings)
+    inside = GRID[(GRID > lo) & (GRID < hi)]
+    nodes = np.concatenate([[lo], inside, [hi]])
+    return float(np.trapezoid(np.interp(nodes, GRID, colorimetry.xyz_weights(settings.cmf)[1]), nodes))
+
+
 def compile_scene(scene: Scene) -> KernelScene:
     """The kernel data for the whole wavelength range of a valid scene (`Scene.validate`, called here);
     `wavelength_modes.with_band` restricts it to one band."""
@@ -356,6 +366,8 @@ def compile_scene(scene: Scene) -> KernelScene:
             width=int(camera.width),
             height=int(camera.height),
             extent=camera_extent(camera),
+            transparent=bool(settings.transparent),
+            white_y=white_y(settings),
         ),
         **_media_arrays(scene.media, settings.cmf),
         lights=_with_surface_lights(lights, scene.surfaces, emissive, surfaces, scene.media, settings.cmf),

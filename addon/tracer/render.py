@@ -49,21 +49,23 @@ def band_scenes(scene: Scene, kernel_scene: KernelScene | None = None) -> list[K
 
 
 def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
-                seed: int, backend: str = "numba") -> tuple[np.ndarray, np.ndarray]:
-    """Σ XYZ and Σ XYZ² over samples [begin, end) of each pixel in tile (x0, y0, width, height)."""
+                seed: int, backend: str = "numba") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Σ XYZ, Σ XYZ² and Σ transparency over samples [begin, end) of each pixel in tile (x0, y0, width,
+    height)."""
     arguments = _tile_arguments(kernel_scene, band, samples, tile, seed)
     backend_module(backend).render_tile(*arguments)
-    return arguments[-2:]
+    return arguments[-3:]
 
 
 def _tile_arguments(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
                     seed: int) -> tuple:
-    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last two). Integers go as
+    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last three). Integers go as
     int64 (the seed as uint64, its whole range) whatever their values, so that no value changes the
     compiled kernel's argument types (a seed of 2⁶³ would be typed uint64, and compile a second kernel)."""
     x0, y0, width, height = (np.int64(value) for value in tile)
     return (kernel_scene, x0, y0, width, height, np.int64(samples[0]), np.int64(samples[1]), np.uint64(seed),
-            np.int64(band), np.zeros((int(height), int(width), 3)), np.zeros((int(height), int(width), 3)))
+            np.int64(band), np.zeros((int(height), int(width), 3)), np.zeros((int(height), int(width), 3)),
+            np.zeros((int(height), int(width))))
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
@@ -190,11 +192,11 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
             break
         with KERNEL_LAUNCH:
             unit_start = time.perf_counter()
-            sum_xyz, sum_sq = render_unit(bands[band], band, samples, tile, seed, backend)
+            sum_xyz, sum_sq, sum_transparent = render_unit(bands[band], band, samples, tile, seed, backend)
             unit_seconds_taken = time.perf_counter() - unit_start
         size = samples[1] - samples[0]
         tiler.measured(tile, size, unit_seconds_taken)
-        film.add(band, tile[1], tile[0], sum_xyz, sum_sq, size)
+        film.add(band, tile[1], tile[0], sum_xyz, sum_sq, size, sum_transparent)
         done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)

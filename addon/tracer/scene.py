@@ -203,13 +203,17 @@ class Surface:
     emitter (a mesh light). `reflectance` is the albedo ρ(λ) in [0, 1], the BRDF ρ/π; `emission` the
     radiance leaving both sides in W·m⁻²·sr⁻¹·nm⁻¹ (Cycles' Emission shader on a mesh is two-sided), None
     for a surface that is not a light. Triangles of zero area (repeated or collinear corners) are allowed
-    and ignored: they are never hit and emit nothing."""
+    and ignored: they are never hit and emit nothing. A `holdout` surface, as Cycles' Holdout (shader or object
+    property), cuts a hole where a camera ray reaches it (directly or through a volume), before any scattering:
+    zero colour behind what lies in front, and zero alpha with Film ▸ Transparent (black without); rays after a
+    scattering see it as its reflectance and emission say (a Holdout shader's surface: reflectance 0)."""
 
     name: str
     vertices: np.ndarray  # (V, 3) float64, world space
     triangles: np.ndarray  # (T, 3) integer indices into vertices
     reflectance: Spectrum  # Lambertian albedo over the wavelength grid, in [0, 1]
     emission: Spectrum | None = None  # radiance leaving both sides, None: not a light
+    holdout: bool = False  # camera rays see a hole here (Film ▸ Transparent: alpha 0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -263,6 +267,9 @@ class RenderSettings:
     # after `min_samples` (0: chosen from the threshold).
     noise_threshold: float = 0.0
     min_samples: int = 0
+    # Film ▸ Transparent: camera rays that reach the background (the infinite lights) see none of it, and the
+    # film's alpha is 1 − the share they saw; the infinite lights still light the scene.
+    transparent: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -337,6 +344,7 @@ def _check_medium(medium: Medium, where: str) -> None:
 def _check_surface(surface: Surface, where: str) -> None:
     if not isinstance(surface.name, str):
         raise SpectralError(f"{where}.name: expected a string, found {checks.shown(surface.name)}")
+    _check_boolean(surface.holdout, f"{where}.holdout")
     vertices = _float_array(lambda: surface.vertices, f"{where}.vertices")
     if vertices.ndim != 2 or vertices.shape[1] != 3:
         raise SpectralError(f"{where}.vertices: expected a list of [x, y, z] points, found an array of shape "
@@ -584,3 +592,9 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
     checks.within(checks.number(settings.noise_threshold, f"{where}.noise_threshold"), f"{where}.noise_threshold",
                   0.0, 1.0)
     checks.whole_within(settings.min_samples, f"{where}.min_samples", 0)
+    _check_boolean(settings.transparent, f"{where}.transparent")
+
+
+def _check_boolean(value, where: str) -> None:
+    if not isinstance(value, (bool, np.bool_)):
+        raise SpectralError(f"{where}: expected true or false, found {checks.shown(value)}")

@@ -53,7 +53,7 @@ _LIGHT_FIELDS = {
     "envmap": {"required": ("image", "basis"), "optional": ("to_world",)},
 }
 _ENVMAP_UNIT = "radiant"  # an envmap's only unit (its strength multiplies its map), so the file may omit it
-_SURFACE = {"required": ("reflectance",), "optional": ("name", "vertices", "triangles", "mesh", "emission")}
+_SURFACE = {"required": ("reflectance",), "optional": ("name", "vertices", "triangles", "mesh", "emission", "holdout")}
 _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettings))}
 
 
@@ -291,7 +291,8 @@ def _surface(value, where: str, folder: Path) -> Surface:
         raise SpectralError(f"{where}.name: expected a string, found {shown(name)}")
     return Surface(name=name, vertices=vertices, triangles=triangles,
                    reflectance=_spectrum(data["reflectance"], f"{where}.reflectance", folder),
-                   emission=None if emission is None else _spectrum(emission, f"{where}.emission", folder))
+                   emission=None if emission is None else _spectrum(emission, f"{where}.emission", folder),
+                   holdout=data.get("holdout", False))
 
 
 def _mesh_array(value, where: str, folder: Path) -> np.ndarray:
@@ -536,6 +537,8 @@ def _surface_json(surface: Surface, index: int, folder: Path) -> dict:
     np.save(folder / data["triangles"], np.asarray(surface.triangles, dtype=np.int64), allow_pickle=False)
     if surface.emission is not None:
         data["emission"] = _spectrum_json(surface.emission)
+    if surface.holdout:
+        data["holdout"] = True
     return data
 
 
@@ -576,7 +579,8 @@ def validate_scene(path) -> list[str]:
     lines += [_describe_medium(medium) for medium in scene.media]
     lines += [_describe_light(light) for light in scene.lights]
     lines += [f"surface {surface.name!r}: {len(surface.triangles)} triangles"
-              + (", emissive" if surface.emission is not None else "") for surface in scene.surfaces]
+              + (", emissive" if surface.emission is not None else "") + (", holdout" if surface.holdout else "")
+              for surface in scene.surfaces]
     s = scene.settings
     lines.append(
         f"render: {s.spp} spp, seed {s.seed}, max depth {s.max_depth}, {s.lambda_min:g}–{s.lambda_max:g} nm "

@@ -122,3 +122,13 @@ def test_a_scene_files_adaptive_sampling_is_imported(registered, tmp_path):
     adaptive = new_scene("Adaptive", 8, 8, dataclasses.replace(RenderSettings(), noise_threshold=0.05, min_samples=8))
     assert adaptive.spectral.use_adaptive_sampling and adaptive.spectral.adaptive_threshold == pytest.approx(0.05)
     assert adaptive.spectral.adaptive_min_samples == 8
+
+
+def test_a_scene_files_film_transparent_is_imported(registered):
+    import dataclasses
+
+    from addon.importer.parts import new_scene
+    from addon.tracer.scene import RenderSettings
+
+    assert not new_scene("Opaque", 8, 8, RenderSettings()).render.film_transparent
+    assert new_scene("Clear", 8, 8, dataclasses.replace(RenderSettings(), transparent=True)).render.film_transparent

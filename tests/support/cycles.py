@@ -22,8 +22,9 @@ BLOCK = 8
 NOISE_BOUND = 4.0  # standard deviations per block
 
 
-def cycles_rgb(scene, folder: Path, spp: int, seed: int, bounces: int = 64) -> np.ndarray:
-    """Cycles' linear Rec.709 image of `scene` (height, width, 3), top row first."""
+def cycles_rgb(scene, folder: Path, spp: int, seed: int, bounces: int = 64, alpha: bool = False) -> np.ndarray:
+    """Cycles' linear Rec.709 image of `scene` (height, width, 3), top row first; with `alpha`, RGBA (height,
+    width, 4), the colour premultiplied (Film ▸ Transparent)."""
     engine = scene.render.engine
     scene.render.engine = "CYCLES"
     cycles = scene.cycles
@@ -35,16 +36,16 @@ def cycles_rgb(scene, folder: Path, spp: int, seed: int, bounces: int = 64) -> n
     cycles.volume_biased, cycles.light_sampling_threshold, cycles.use_volume_guiding = False, 0.0, False
     cycles.pixel_filter_type, cycles.filter_width = "BOX", 1.0  # the tracer's pixel
     settings = scene.render.image_settings
-    settings.file_format, settings.color_depth, settings.color_mode = "OPEN_EXR", "32", "RGB"
+    settings.file_format, settings.color_depth, settings.color_mode = "OPEN_EXR", "32", "RGBA" if alpha else "RGB"
     scene.render.filepath = str(folder / f"cycles_{seed}.exr")
     try:
         bpy.ops.render.render(write_still=True, scene=scene.name)
     finally:
         scene.render.engine = engine
     channels = image_io.read_exr(scene.render.filepath)
-    names = sorted(name for name in channels if name.split(".")[-1] in "RGB" and len(name.split(".")[-1]) == 1)
-    by_letter = {name.split(".")[-1]: channels[name] for name in names}
-    return np.stack([by_letter["R"], by_letter["G"], by_letter["B"]], axis=-1).astype(np.float64)
+    letters = "RGBA" if alpha else "RGB"
+    by_letter = {name.split(".")[-1]: channels[name] for name in channels if name.split(".")[-1] in tuple(letters)}
+    return np.stack([by_letter[letter] for letter in letters], axis=-1).astype(np.float64)
 
 
 def blocks(image: np.ndarray) -> np.ndarray:

@@ -194,3 +194,21 @@ def test_write_all_refuses_two_outputs_of_one_file(tmp_path):
         image_io.write_all([image_io.npy(target, np.zeros((1, 1, 3))), image_io.npy(tmp_path / "." / "a.npy",
                                                                                   np.ones((1, 1, 3)))])
     assert not target.exists()
+
+
+def test_transparent_renders_an_alpha_into_the_exr_and_the_png(write_scene, scene_data, tmp_path):
+    """--transparent turns on the scene's render.transparent: the sun is the only light, so a camera ray that
+    misses the cloud sees nothing and alpha is below 1 there; without it alpha is 1."""
+    scene = write_scene()
+    out, png = tmp_path / "image.exr", tmp_path / "image.png"
+    done = run_cli("render", scene, "--spp", 4, "--out", out, "--png", png, "--transparent", "--quiet")
+    assert done.returncode == 0, done.stderr
+    alpha = image_io.read_exr(out)["ViewLayer.Combined.A"]
+    assert alpha.min() < 0.5 and alpha.max() > 0.0
+    oiio = image_io._open_image_io()
+    image = oiio.ImageInput.open(str(png))
+    assert image.spec().nchannels == 4
+    image.close()
+    done = run_cli("render", scene, "--spp", 4, "--out", out, "--quiet")
+    assert done.returncode == 0, done.stderr
+    np.testing.assert_allclose(image_io.read_exr(out)["ViewLayer.Combined.A"], 1.0)

@@ -32,13 +32,15 @@ def small_scene(spp=24, bands=2, seed=11):
     box = s.box_grid(cells=(6, 6, 6))
     return s.scene(s.perspective_camera(12, 10, fov_degrees=25.0),
                    [s.medium(box, extinction=s.smooth_ramp(3.0, 1.0), albedo=0.8, g=0.3)],
-                   [s.environment(0.5), s.sun((1.0, 0.5, 2.0), strength=2.0)], spp=spp, bands=bands, seed=seed)
+                   [s.environment(0.5), s.sun((1.0, 0.5, 2.0), strength=2.0)], spp=spp, bands=bands, seed=seed,
+                   transparent=True)
 
 
 def assert_same_film(expected: Film, actual: Film):
     assert np.array_equal(expected.samples, actual.samples)
     assert np.array_equal(expected.sum_xyz, actual.sum_xyz)
     assert np.array_equal(expected.sum_sq, actual.sum_sq)
+    assert np.array_equal(expected.sum_transparent, actual.sum_transparent)
     assert np.array_equal(expected.xyz, actual.xyz)
     assert np.array_equal(expected.variance, actual.variance)
 
@@ -74,12 +76,12 @@ def test_merging_in_any_completion_order_is_bit_identical():
     expected = Film(width, height, bands)
     for index, size in enumerate(sizes):
         for band in range(bands):
-            expected.add(band, 0, 0, passes[index, band], passes[index, band] ** 2, size)
+            expected.add(band, 0, 0, passes[index, band], passes[index, band] ** 2, size, passes[index, band, ..., 0])
 
     def tile_of(unit):
         x0, y0, w, h = unit.tile
         values = passes[unit.pass_index, unit.band, y0:y0 + h, x0:x0 + w]
-        return values, values**2
+        return values, values**2, values[..., 0]
 
     for trial in range(5):
         order = rng.permutation(len(units))
@@ -98,7 +100,8 @@ def test_merging_in_any_completion_order_is_bit_identical():
     naive = Film(width, height, bands)
     for index in rng.permutation(len(units)):
         unit = units[index]
-        naive.add(unit.band, unit.tile[1], unit.tile[0], *tile_of(unit), sizes[unit.pass_index])
+        xyz, squares, transparent = tile_of(unit)
+        naive.add(unit.band, unit.tile[1], unit.tile[0], xyz, squares, sizes[unit.pass_index], transparent)
     assert not np.array_equal(naive.sum_xyz, expected.sum_xyz)
 
 

@@ -39,3 +39,16 @@ def test_variance_is_the_sample_variance_of_the_mean_summed_over_bands():
     one = Film(3, 2)
     one.add(0, 0, 0, values[0, 0], values[0, 0] ** 2, 1)
     assert not one.variance.any()  # one sample says nothing about the spread
+
+
+def test_alpha_is_one_minus_the_mean_transparency_summed_over_bands():
+    """Each band's mean transparency is its share of the background seen; alpha is 1 − their sum, per pixel
+    by its own sample count, and 1 where no transparency was added."""
+    film = Film(2, 1, bands=2)
+    zeros = np.zeros((1, 2, 3))
+    film.add(0, 0, 0, zeros, zeros, 4, np.array([[1.0, 2.0]]))  # transparency 0.25 and 0.5 in band 0
+    film.add(1, 0, 0, zeros, zeros, 2, np.array([[0.5, 0.0]]))  # 0.25 and 0 in band 1
+    np.testing.assert_allclose(film.alpha, [[0.5, 0.5]])
+    film.add(0, 0, 1, zeros[:, :1], zeros[:, :1], 4)  # more samples of one pixel, seeing nothing
+    np.testing.assert_allclose(film.alpha, [[0.5, 0.75]])
+    np.testing.assert_allclose(Film(3, 2).alpha, 1.0)

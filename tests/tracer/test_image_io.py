@@ -66,3 +66,21 @@ def test_written_files_get_the_mode_of_a_new_file(tmp_path):
     os.umask(umask)
     written = image_io.write_all([image_io.npy(tmp_path / "xyz.npy", np.zeros((2, 2, 3)))])
     assert stat.S_IMODE(written[0].stat().st_mode) == 0o666 & ~umask
+
+
+def test_a_png_with_alpha_stores_straight_colour_and_its_alpha(tmp_path):
+    """A render's colour is premultiplied; PNG's alpha is straight, so the colour is divided by alpha first."""
+    alpha = np.array([[1.0, 0.5, 0.0, 1.5]])
+    premultiplied = np.full((1, 4, 3), 0.25) * alpha[..., None]
+    path = image_io.write_png(tmp_path / "image.png", premultiplied, alpha=alpha)
+    oiio = image_io._open_image_io()
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)  # the file's values, not multiplied by alpha on reading
+    image = oiio.ImageInput.open(str(path), config)
+    pixels = image.read_image(0, 0, 0, 4, "uint8")
+    image.close()
+    assert pixels.shape == (1, 4, 4)
+    assert pixels[0, :, 3].tolist() == [255, 128, 0, 255]  # clipped to [0, 1]
+    shown = image_io.srgb_display(np.full((1, 1, 3), 0.25))[0, 0]
+    assert pixels[0, 0, :3].tolist() == pixels[0, 1, :3].tolist() == shown.tolist()
+    assert pixels[0, 2, :3].tolist() == [0, 0, 0]

@@ -46,13 +46,15 @@ BVH_MAX_DEPTH = 96
 
 
 class KernelCamera(NamedTuple):
-    """The camera: its pose, kind and film."""
+    """The camera: its pose, kind and film (Film ▸ Transparent: `kernels/transparency.py`)."""
 
     to_world: np.ndarray  # (4, 4)
     kind: int
     width: int
     height: int
     extent: np.ndarray  # (4,): film extent x, y and shift x, y (camera-space units at z = -1 or ortho)
+    transparent: bool  # camera rays that reach the background see none of it (they count as transparency)
+    white_y: float  # Y of a unit equal-energy radiance over the camera's wavelengths (the transparency's scale)
 
 
 class KernelDensity(NamedTuple):
@@ -170,6 +172,7 @@ class KernelSurfaces(NamedTuple):
     node_count: np.ndarray  # (N,) a leaf's number of triangles, 0 for an inner node
     reflectance: np.ndarray  # (S, GRID) Lambertian albedo
     light: np.ndarray  # (S,) the kernel light (LIGHT_MESH) of an emissive surface, -1 for the others
+    holdout: np.ndarray  # (S,) bool: camera rays that reach it see a hole (`kernels/transparency.py`)
     of_light: np.ndarray  # (NL,) the surface of each kernel light, -1 for lights that are not surfaces
     area: np.ndarray  # (S,) total area
     emitter_cdf: np.ndarray  # each emissive surface's cdf over its triangles by area, from 0 to 1, back to back

@@ -28,6 +28,8 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   collects the surface's emission (MIS-weighted against light sampling after a scattering vertex,
   `_surface_emission`), then reflects: next-event estimation with the Lambertian BRDF and cosine-weighted
   sampling (`_sample_lambert`). Shadow rays that meet a surface carry nothing (`_shadow_blocked`).
+- Film ▸ Transparent and holdouts (`transparency`): a camera path that reaches the background (transparent) or a
+  holdout surface before any scattering adds its throughput to its transparency instead of light (`_see_through`).
 
 Structure: `render_tile` runs runs of pixels in parallel (`_render_runs`); `_render_pixels` makes a run's buffers once
 (each allocation updates Numba's global counters atomically) and `_render_samples` runs a pixel's samples, each through
@@ -98,6 +100,7 @@ from .media import (
 from .numba_cache import cached
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
+from .transparency import transparency_weight
 
 # Every kernel function divides as NumPy does (x/0 gives inf or nan, like the NumPy backend) instead of
 # Python's model, which checks every divisor for zero to raise ZeroDivisionError: the images are
@@ -584,8 +587,9 @@ def _sample_lambert(n, path, hit):
 # One path's state, one slot per wavelength (buffers made once per pixel by `_new_path`, reused by its
 # samples): the stream of random numbers (`_next`), camera wavelengths and their pdfs, current
 # wavelengths (the hero changes at fluorescence), the media's spectra at them (`_fill_spectral_cache`),
-# throughput, the MIS pdf ratios of unidirectional and light sampling, and the radiance collected.
-Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance")
+# throughput, the MIS pdf ratios of unidirectional and light sampling, the radiance collected, and the camera
+# path's transparency (one value: `_see_through`).
+Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance transparent")
 # Medium coefficients at a point (`_coefficients`): per wavelength summed over media, and per medium;
 # `dye` holds the dyes' absorption at their mean excitation (`fluorescent_reservoir`'s optical depth).
 Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s medium_fl dye")
@@ -609,7 +613,7 @@ Hit = namedtuple("Hit", "nodes entries normal reflectance")
 def _new_path(media):
     return Path(np.zeros(4, dtype=np.uint64), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
                 np.empty((media, SPEC_ROWS, MAX_LAMBDAS)), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
-                np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS))
+                np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.zeros(1))
 
 
 @jit(inline="always")
@@ -659,7 +663,22 @@ def _sample_wavelengths(ks, n, path):
         path.r_u[i] = 1.0
         path.r_l[i] = 1.0
         path.radiance[i] = 0.0
+    path.transparent[0] = 0.0
     _fill_spectral_cache(ks, path.lams, n, path.spec)
+
+
+@jit(inline="always")
+def _see_through(ks, n, path):
+    """A camera path reaching the background with Film ▸ Transparent on, or a holdout surface: its throughput
+    (each wavelength's, as its radiance would have been weighted) into its transparency, as `transparency`
+    weighs it; nothing with Film ▸ Transparent off (a holdout is then black)."""
+    if not ks.camera.transparent:
+        return
+    mean_r = _mean(path.r_u, n)
+    if mean_r > 0.0:
+        for i in range(n):
+            path.transparent[0] += path.beta[i] / mean_r * transparency_weight(ks, path.lam_cam[i], path.pdf_cam[i],
+                                                                               n)
 
 
 @jit(inline="always")
@@ -935,7 +954,11 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, 
 
 @jit(inline="always")
 def _escape(ks, dx, dy, dz, scattered, survival, n, path, light):
-    """Radiance of the infinite lights seen along the escaping ray, each added by `_add_hit_light`."""
+    """Radiance of the infinite lights seen along the escaping ray, each added by `_add_hit_light`; a camera
+    ray sees through them with Film ▸ Transparent on (`_see_through`)."""
+    if not scattered and ks.camera.transparent:
+        _see_through(ks, n, path)
+        return
     for chosen in range(ks.lights.kind.shape[0]):
         for i in range(n):
             light.radiance[i] = infinite_radiance(ks, chosen, on_grid(path.lams[i]), dx, dy, dz)
@@ -1053,6 +1076,9 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, ligh
             if triangle < 0:
                 _escape(ks, dx, dy, dz, scattered, survival, n, path, light)
                 return
+            if not scattered and ks.surfaces.holdout[ks.surfaces.surface[triangle]]:
+                _see_through(ks, n, path)  # a holdout seen by the camera: a hole, for camera rays only
+                return
             _surface_emission(ks, triangle, t_hit, dx, dy, dz, scattered, survival, n, path, light)
             depth += 1
             if depth > ks.termination.max_depth:
@@ -1100,36 +1126,38 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl, hit)
 
 
 @jit
-def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
-    """Samples [sample_begin, sample_end) of the tile's pixels [first, last) (row-major), added to `sum_xyz`
-    and `sum_sq`. The path's buffers are made once for them all: each allocation updates Numba's global
-    allocation counters atomically, which threads contend for."""
+def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
+                   sum_transparent):
+    """Samples [sample_begin, sample_end) of the tile's pixels [first, last) (row-major), added to `sum_xyz`,
+    `sum_sq` and `sum_transparent`. The path's buffers are made once for them all: each allocation updates
+    Numba's global allocation counters atomically, which threads contend for."""
     media = max(ks.media.density_scale.shape[0], 1)
     path, vertex = _new_path(media), _new_coefficients(media)
     light, tracker, fl, hit = _new_light_sample(), _new_tracker(media), _new_fluorescent(), _new_hit()
     for index in range(first, last):
         row, column = index // tile_width, index % tile_width
         px, py = x0 + column, y0 + row
-        sx, sy, sz, qx, qy, qz = _render_samples(ks, px, py, py * ks.camera.width + px, sample_begin, sample_end, seed,
-                                                 band, path, vertex, light, tracker, fl, hit)
+        sx, sy, sz, qx, qy, qz, st = _render_samples(ks, px, py, py * ks.camera.width + px, sample_begin, sample_end,
+                                                     seed, band, path, vertex, light, tracker, fl, hit)
         sum_xyz[row, column, 0] += sx
         sum_xyz[row, column, 1] += sy
         sum_xyz[row, column, 2] += sz
         sum_sq[row, column, 0] += qx
         sum_sq[row, column, 1] += qy
         sum_sq[row, column, 2] += qz
+        sum_transparent[row, column] += st
 
 
 @jit
 def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, light, tracker, fl, hit):
-    """Samples [sample_begin, sample_end) of one pixel, (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z²), in the path's
-    buffers (`_render_pixels` makes them). The scene and the buffers, which the caller keeps
+    """Samples [sample_begin, sample_end) of one pixel, (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z², Σ transparency), in the
+    path's buffers (`_render_pixels` makes them). The scene and the buffers, which the caller keeps
     alive, are borrowed (`_borrowed`): the loop below then updates no reference counts."""
     ks, path, vertex, light, tracker, fl, hit = (_borrowed(ks), _borrowed(path), _borrowed(vertex), _borrowed(light),
                                                  _borrowed(tracker), _borrowed(fl), _borrowed(hit))
     n = ks.wavelengths.per_path
     path.stream[2] = pixel_key(seed, band, pixel)
-    sx, sy, sz, qx, qy, qz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    sx, sy, sz, qx, qy, qz, st = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for sample in range(sample_begin, sample_end):
         path.stream[0] = path_key(path.stream[2], sample)
         path.stream[1] = 0
@@ -1140,7 +1168,8 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
         x, y, z = _path_xyz(ks, n, path)
         sx, sy, sz = sx + x, sy + y, sz + z
         qx, qy, qz = qx + x * x, qy + y * y, qz + z * z
-    return sx, sy, sz, qx, qy, qz
+        st += path.transparent[0]
+    return sx, sy, sz, qx, qy, qz, st
 
 
 # A tile's pixels are shared among the threads in this many runs of neighbouring pixels, each with its own
@@ -1150,18 +1179,20 @@ PIXEL_CHUNKS = 64
 
 @cached
 @jit(nogil=True)
-def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
+                sum_transparent):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
-    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
+    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel) and
+    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`)."""
     _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.glow, ks.media, ks.fluorescence, ks.lights,
                  ks.envmaps, ks.surfaces, ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin,
-                 sample_end, seed, band, sum_xyz, sum_sq)
+                 sample_end, seed, band, sum_xyz, sum_sq, sum_transparent)
 
 
 @jit(parallel=True, nogil=True)
 def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
                  wavelengths, termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
-                 sum_xyz, sum_sq):
+                 sum_xyz, sum_sq, sum_transparent):
     """`render_tile`'s runs of pixels, in parallel. The kernel scene comes as its groups, and each run puts
     them together again: Numba's parallel loop hands a tuple to its threads member by member, which fails
     when a member is a tuple itself."""
@@ -1171,7 +1202,7 @@ def _render_runs(camera, density, majorant, temperature, glow, media, fluorescen
         ks = KernelScene(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
                          wavelengths, termination)
         _render_pixels(ks, x0, y0, tile_width, chunk * pixels // chunks, (chunk + 1) * pixels // chunks, sample_begin,
-                       sample_end, seed, band, sum_xyz, sum_sq)
+                       sample_end, seed, band, sum_xyz, sum_sq, sum_transparent)
 
 
 def set_threads(count: int) -> None:

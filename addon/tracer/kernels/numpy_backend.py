@@ -44,6 +44,7 @@ from .light_sampling import (
 from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
+from .transparency import transparency_weight
 
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
 CHUNK_PAIRS = 1 << 20  # ray–triangle pairs tested together (`_closest_hits`: ~20 arrays of this size)
@@ -573,6 +574,29 @@ def _escape(ks, paths, radiance, survival):
         radiance[paths.id] += np.where(mean_r > 0.0, paths.beta * light_radiance * weight / mean_r, 0.0)
 
 
+def _holes(ks, paths, sky, surface, triangle):
+    """Which escaping paths (`sky`) or paths reaching a surface (`surface`, at `triangle`) see through: camera
+    rays (not scattered) reaching the background with Film ▸ Transparent on, or a holdout surface."""
+    camera = ~paths.scattered
+    holdout = (ks.surfaces.holdout[ks.surfaces.surface[np.maximum(triangle, 0)]] if ks.surfaces.surface.size
+               else False)
+    return camera & ((sky & ks.camera.transparent) | (surface & holdout))
+
+
+def _see_through(ks, paths, transparent):
+    """Camera paths that see through (`_holes`): their throughput into their transparency, as `transparency`
+    weighs it (the Numba kernel's `_see_through`); nothing with Film ▸ Transparent off (a holdout is black)."""
+    if not ks.camera.transparent:
+        return
+    mean_r = _mean(paths.r_u)
+    n = paths.lams.shape[1]
+    total = np.zeros(len(paths))
+    for i in range(n):
+        weight = transparency_weight(ks, paths.lams[:, i], pdf_binned(ks.wavelengths.pdf, paths.lams[:, i]), n)
+        total = total + np.where(mean_r > 0.0, paths.beta[:, i] / mean_r * weight, 0.0)
+    transparent[paths.id] += total
+
+
 def _attenuation_spectra(ks, lams):
     """(extinction, excitation), each (rays, media, wavelengths): every medium's spectra at the rays'
     wavelengths `lams` (rays, wavelengths)."""
@@ -738,13 +762,17 @@ def _scatter(ks, paths, vertex, isotropic, radiance):
     return paths.take(_roulette(ks, paths))
 
 
-def _bounce(ks, paths, radiance, fl):
+def _bounce(ks, paths, radiance, fl, transparent):
     """Every live path to its next scattering vertex (in a medium or on a surface) and past it; returns the
-    paths still alive."""
+    paths still alive. Camera paths that see through add to `transparent` (`_holes`)."""
     t_hit, triangle = _closest_hits(ks, paths.o, paths.d, INF)
     vertex = _free_flight(ks, paths, radiance, fl, t_hit)
     escaped = vertex.event == EVENT_ESCAPE
     sky, surface = escaped & (triangle < 0), escaped & (triangle >= 0)
+    holes = _holes(ks, paths, sky, surface, triangle)
+    if holes.any():
+        _see_through(ks, paths.take(holes), transparent)
+        sky, surface = sky & ~holes, surface & ~holes
     if sky.any():
         _escape(ks, paths.take(sky), radiance, vertex.survival[sky])
     if surface.any():
@@ -804,8 +832,9 @@ def _fluorescent_paths(ks, stream, ids, reservoir, fl):
 
 
 def _trace(ks, px, py, pixel_keys, samples):
-    """XYZ estimates (paths, 3) of one camera path per sample, through pixels (px, py) keyed `pixel_keys`:
-    the camera paths, then rounds of fluorescent sub-paths (the Numba kernel's `_trace`)."""
+    """XYZ estimates (paths, 3) and transparencies (paths,) of one camera path per sample, through pixels
+    (px, py) keyed `pixel_keys`: the camera paths, then rounds of fluorescent sub-paths (the Numba kernel's
+    `_trace`)."""
     paths, lam_cam, pdf_cam = _camera_paths(ks, px, py, pixel_keys, samples)
     count, n = lam_cam.shape
     stream = paths.stream
@@ -813,9 +842,9 @@ def _trace(ks, px, py, pixel_keys, samples):
                 share=np.zeros((count, RESERVOIRS, n)), medium=np.zeros((count, RESERVOIRS), dtype=np.int64),
                 depth=np.zeros((count, RESERVOIRS), dtype=np.int64), tau_at=np.zeros((count, RESERVOIRS)),
                 tau=np.zeros(count))
-    radiance = np.zeros((count, n))
+    radiance, transparent = np.zeros((count, n)), np.zeros(count)
     while len(paths):
-        paths = _bounce(ks, paths, radiance, fl)
+        paths = _bounce(ks, paths, radiance, fl, transparent)
     everyone = np.arange(count)
     reservoir, weight = np.zeros(count, dtype=np.int64), np.zeros(count)
     _choose_sources(stream, fl, everyone, reservoir, weight)
@@ -827,7 +856,7 @@ def _trace(ks, px, py, pixel_keys, samples):
         paths = _scatter(ks, paths, _Batch(medium_s=np.zeros((ids.size, ks.media.density_scale.shape[0], 1))),
                          np.ones(ids.size, dtype=bool), emitted)
         while len(paths):
-            paths = _bounce(ks, paths, emitted, fl)
+            paths = _bounce(ks, paths, emitted, fl, transparent)
         radiance[ids] += scale[ids] * emitted[ids]
         _choose_sources(stream, fl, ids, reservoir, weight)
         scale[ids] *= weight[ids, None]
@@ -839,12 +868,14 @@ def _trace(ks, px, py, pixel_keys, samples):
         at = on_grid(lam_cam[:, i])
         for c in range(3):
             xyz[:, c] += np.where(counted, scale_i * table_at(ks.wavelengths.xyz_weights, c, at), 0.0)
-    return xyz
+    return xyz, transparent
 
 
-def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq):
+def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
+                sum_transparent):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
-    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel)."""
+    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel) and
+    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`)."""
     samples = sample_end - sample_begin
     total = tile_width * tile_height * samples
     for start in range(0, total, CHUNK_PATHS):
@@ -854,9 +885,10 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
         px, py = x0 + column, y0 + row
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             pixel_keys = pixel_key(seed, band, py * ks.camera.width + px)
-            xyz = _trace(ks, px, py, pixel_keys, (sample_begin + sample).astype(np.uint64))
+            xyz, transparent = _trace(ks, px, py, pixel_keys, (sample_begin + sample).astype(np.uint64))
         np.add.at(sum_xyz, (row, column), xyz)
         np.add.at(sum_sq, (row, column), xyz * xyz)
+        np.add.at(sum_transparent, (row, column), transparent)
 
 
 def set_threads(count: int) -> None:

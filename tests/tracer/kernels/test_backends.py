@@ -179,9 +179,20 @@ def mesh_light():
     return s.scene(s.perspective_camera(8, 8, fov_degrees=50.0), [medium], [], [floor, lamp])
 
 
+def transparent_holdout():
+    """Film ▸ Transparent over a chromatic medium, a floor under half of it and a holdout under a quarter, under
+    a finite sun and an environment: camera paths that escape or reach the holdout add their transparency."""
+    medium = s.medium(s.box_grid(), extinction=s.smooth_ramp(1.5, 0.5), albedo=0.9, g=0.3)
+    floor = s.parallelogram((-3.0, -3.0, -0.4), (3.0, 0.0, 0.0), (0.0, 6.0, 0.0), 2, reflectance=0.6, name="floor")
+    hole = s.parallelogram((0.0, -3.0, -0.6), (3.0, 0.0, 0.0), (0.0, 3.0, 0.0), 1, reflectance=0.5, holdout=True,
+                           name="hole")
+    lights = [s.sun([0.3, 0.2, 1.0], 2.0, angle=0.2), s.environment(0.4)]
+    return s.scene(s.perspective_camera(8, 8, fov_degrees=50.0), [medium], lights, [floor, hole], transparent=True)
+
+
 SCENES = {build.__name__: build for build in (grey_furnace, chromatic, heterogeneous, fluorescence, blackbody,
                                               glow, rayleigh, two_media, point_and_spot, area_lights, envmap,
-                                              surfaces, mesh_light)}
+                                              surfaces, mesh_light, transparent_holdout)}
 
 
 def render_film(scene, backend, seed, spp=SPP) -> Film:
@@ -190,8 +201,9 @@ def render_film(scene, backend, seed, spp=SPP) -> Film:
     bands = band_scenes(scene)
     film = Film(camera.width, camera.height, len(bands))
     for band, kernel_scene in enumerate(bands):
-        sums = render_unit(kernel_scene, band, (0, spp), (0, 0, camera.width, camera.height), seed, backend)
-        film.add(band, 0, 0, *sums, spp)
+        sum_xyz, sum_sq, sum_transparent = render_unit(kernel_scene, band, (0, spp),
+                                                       (0, 0, camera.width, camera.height), seed, backend)
+        film.add(band, 0, 0, sum_xyz, sum_sq, spp, sum_transparent)
     return film
 
 
@@ -277,6 +289,8 @@ def test_same_seed_traces_the_same_paths(films, name):
     np.testing.assert_array_equal(numpy_film.samples, numba_film.samples)
     close = np.isclose(numpy_film.sum_xyz, numba_film.sum_xyz, rtol=1e-12, atol=1e-300)
     assert close.all(), f"only {np.mean(close):.1%} of pixel values agree"
+    close = np.isclose(numpy_film.sum_transparent, numba_film.sum_transparent, rtol=1e-12, atol=1e-300)
+    assert close.all(), f"only {np.mean(close):.1%} of pixel transparencies agree"
 
 
 def test_grey_furnace_returns_the_environment(films):
