@@ -207,6 +207,8 @@ class Surface:
     triangles: np.ndarray  # (T, 3) integer indices into vertices
     reflectance: Spectrum  # Lambertian albedo over the wavelength grid, in [0, 1]
     emission: Spectrum | None = None  # radiance leaving both sides, None: not a light
+    object: str = ""  # its Blender object's name, for Cryptomatte ("": the surface's name)
+    material: str = ""  # its material's name, for Cryptomatte ("": the surface's name)
 
 
 @dataclass(frozen=True, eq=False)
@@ -260,6 +262,13 @@ class RenderSettings:
     # after `min_samples` (0: chosen from the threshold).
     noise_threshold: float = 0.0
     min_samples: int = 0
+    # Data passes written beside the image (`passes.DATA_PASSES`: Depth, Mist, Normal, CryptoObject,
+    # CryptoMaterial), with World ▸ Mist Pass's start, depth and falloff and Cryptomatte's levels.
+    passes: tuple[str, ...] = ()
+    mist_start: float = 5.0
+    mist_depth: float = 25.0
+    mist_falloff: str = "quadratic"  # "quadratic" | "linear" | "inverse_quadratic"
+    cryptomatte_depth: int = 6
 
 
 @dataclass(frozen=True, eq=False)
@@ -336,8 +345,9 @@ def _check_medium(medium: Medium, where: str) -> None:
 
 
 def _check_surface(surface: Surface, where: str) -> None:
-    if not isinstance(surface.name, str):
-        raise SpectralError(f"{where}.name: expected a string, found {checks.shown(surface.name)}")
+    for key in ("name", "object", "material"):
+        if not isinstance(getattr(surface, key), str):
+            raise SpectralError(f"{where}.{key}: expected a string, found {checks.shown(getattr(surface, key))}")
     vertices = _float_array(lambda: surface.vertices, f"{where}.vertices")
     if vertices.ndim != 2 or vertices.shape[1] != 3:
         raise SpectralError(f"{where}.vertices: expected a list of [x, y, z] points, found an array of shape "
@@ -583,3 +593,6 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
     checks.within(checks.number(settings.noise_threshold, f"{where}.noise_threshold"), f"{where}.noise_threshold",
                   0.0, 1.0)
     checks.whole_within(settings.min_samples, f"{where}.min_samples", 0)
+    from .passes import check_passes  # the passes' rules, where they are made
+
+    check_passes(settings, where)
