@@ -25,7 +25,7 @@ import numpy as np
 
 from . import checks
 from .errors import SpectralError
-from .kernels.layout import KernelScene
+from .kernels.layout import FIRST_HIT_VALUES, KernelScene
 
 DEPTH, MIST, NORMAL, CRYPTO_OBJECT, CRYPTO_MATERIAL = "Depth", "Mist", "Normal", "CryptoObject", "CryptoMaterial"
 DATA_PASSES = (DEPTH, MIST, NORMAL, CRYPTO_OBJECT, CRYPTO_MATERIAL)  # the names a scene may ask for
@@ -126,9 +126,10 @@ def render_passes(scene, kernel_scene: KernelScene, spp: int, seed: int, backend
     wanted = set(settings.passes)
     if not wanted:
         return PassImages({}, {})
-    from .kernels import first_hit
-
-    find = first_hit.first_hits if backend == "numba" else first_hit.first_hits_numpy
+    if backend == "numba":
+        from .kernels.first_hit import first_hits as find
+    else:
+        from .kernels.numpy_backend import first_hits as find
     camera, surfaces = kernel_scene.camera, kernel_scene.surfaces
     width, height = camera.width, camera.height
     mattes = {kind: _matte_table(scene, kind) for kind in (CRYPTO_OBJECT, CRYPTO_MATERIAL) if kind in wanted}
@@ -137,13 +138,13 @@ def render_passes(scene, kernel_scene: KernelScene, spp: int, seed: int, backend
     normal = np.zeros((height, width, 3))
     counts = {kind: np.zeros((height, width, len(ids)), np.int32) for kind, (ids, _) in mattes.items()}
     exponent = MIST_FALLOFFS[settings.mist_falloff]
-    samples = max(1, min(spp, FIRST_HIT_BYTES // (8 * first_hit.VALUES * width)))
-    rows = max(1, FIRST_HIT_BYTES // (8 * first_hit.VALUES * width * samples))
+    samples = max(1, min(spp, FIRST_HIT_BYTES // (8 * FIRST_HIT_VALUES * width)))
+    rows = max(1, FIRST_HIT_BYTES // (8 * FIRST_HIT_VALUES * width * samples))
     for y0 in range(0, height, rows):
         h = min(rows, height - y0)
         for begin in range(0, spp, samples):
             count = min(samples, spp - begin)
-            values, triangles = np.empty((h, width, count, first_hit.VALUES)), np.empty((h, width, count), np.int64)
+            values, triangles = np.empty((h, width, count, FIRST_HIT_VALUES)), np.empty((h, width, count), np.int64)
             find(camera, surfaces, np.int64(0), np.int64(y0), np.int64(width), np.int64(h), np.int64(begin),
                  np.int64(begin + count), np.uint64(seed), values, triangles)
             hit = triangles >= 0

@@ -1,10 +1,11 @@
-"""The first-hit kernel (`kernels/first_hit.py`): the Numba kernel against its NumPy oracle, and its depths and
-normals against closed forms."""
+"""The first-hit kernel (`kernels/first_hit.py`): the Numba kernel against its NumPy oracle (`numpy_backend.first_hits`),
+and its depths and normals against closed forms."""
 
 import numpy as np
 import pytest
 
-from addon.tracer.kernels import first_hit
+from addon.tracer.kernels import first_hit, numpy_backend
+from addon.tracer.kernels.layout import FIRST_HIT_VALUES
 from addon.tracer.lowering import compile_scene
 from tests.support import scenes as s
 
@@ -17,7 +18,7 @@ def _hits(scene, find, samples=(0, 4), seed=3):
     ks = compile_scene(scene)
     width, height = scene.camera.width, scene.camera.height
     count = samples[1] - samples[0]
-    values, triangles = np.empty((height, width, count, first_hit.VALUES)), np.empty((height, width, count), np.int64)
+    values, triangles = np.empty((height, width, count, FIRST_HIT_VALUES)), np.empty((height, width, count), np.int64)
     find(ks.camera, ks.surfaces, np.int64(0), np.int64(0), np.int64(width), np.int64(height), np.int64(samples[0]),
          np.int64(samples[1]), np.uint64(seed), values, triangles)
     return values, triangles, ks
@@ -36,7 +37,7 @@ def test_numba_kernel_equals_its_numpy_oracle(camera):
     """Same rays, same triangles: the hierarchy walk and brute force find the same hits, to rounding."""
     scene = _scene(camera, [tilted_plane(), s.parallelogram((-0.5, -3.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))])
     fast, fast_triangles, _ = _hits(scene, first_hit.first_hits, (2, 7))
-    slow, slow_triangles, _ = _hits(scene, first_hit.first_hits_numpy, (2, 7))
+    slow, slow_triangles, _ = _hits(scene, numpy_backend.first_hits, (2, 7))
     np.testing.assert_array_equal(fast_triangles, slow_triangles)
     assert (fast_triangles >= 0).any() and (fast_triangles < 0).any()  # hits and misses both compared
     np.testing.assert_allclose(fast, slow, rtol=1e-12, atol=1e-12)
