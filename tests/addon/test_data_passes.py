@@ -138,3 +138,37 @@ def test_depth_mist_and_normal_agree_with_cycles(registered, tmp_path):
         np.testing.assert_allclose(blocks(ours[name])[inner], theirs, atol=tolerance, err_msg=name)
     theirs = np.stack([cycles[f"ViewLayer.Normal.{c}"] for c in "XYZ"], axis=-1)
     np.testing.assert_allclose(blocks(ours["Normal"])[inner], blocks(theirs)[inner], atol=0.02)
+
+
+def test_the_passes_panel_offers_only_the_passes_the_engine_makes(registered):
+    from types import SimpleNamespace
+
+    from addon.export.passes import TOGGLES
+    from tests.addon.recording import draw
+
+    scene, layer = surfaces_scene()
+    scene.render.engine = "SPECTRAL_VOLUME"
+    context = SimpleNamespace(scene=scene, engine=scene.render.engine, view_layer=layer, world=scene.world)
+    layout = draw(bpy.types.SPECTRAL_PT_view_layer_passes, context)
+    drawn = {args[1] for kind, args, _ in layout.calls if kind == "prop"}
+    assert drawn == {"use_pass_combined", "pass_cryptomatte_depth", *TOGGLES.values()}
+    mist = {args[1] for kind, args, _ in draw(bpy.types.SPECTRAL_PT_world_mist, context).calls if kind == "prop"}
+    assert mist == {"start", "depth", "falloff"}
+    # Blender's generic pass panels (which offer Emission, AO, AOVs, …) do not show under this engine
+    for name in ("VIEWLAYER_PT_layer_passes", "VIEWLAYER_PT_eevee_layer_passes_light", "VIEWLAYER_PT_layer_passes_aov"):
+        assert "SPECTRAL_VOLUME" not in getattr(bpy.types, name).COMPAT_ENGINES
+
+
+@pytest.mark.parametrize("renderer", ["farm", "emulation"])
+def test_a_farm_and_the_emulation_name_the_data_passes_they_leave_out(registered, renderer):
+    from addon.jobs.kinds import render_job
+
+    scene, _ = surfaces_scene()
+    export = export_scene(bpy.context.evaluated_depsgraph_get())
+    if renderer == "emulation":
+        scene.spectral.renderer = "CYCLES"
+    job = render_job(scene, export, scheduler="tcp://127.0.0.1:1" if renderer == "farm" else None)
+    if renderer == "farm":
+        assert job.scene.settings.passes == ()  # the farm is not asked for them (it would refuse)
+    warning = next(w for w in job.warnings if "does not render data passes" in w)
+    assert "Depth, Mist, Normal, CryptoObject, CryptoMaterial" in warning
