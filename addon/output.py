@@ -15,7 +15,7 @@ import numpy as np
 from .export.camera import Region, render_region
 from .tracer import denoise, image_io
 from .tracer.image_io import COMBINED, VARIANCE, XYZ
-from .tracer.passes import DEPTH, MIST, NO_HIT_DEPTH, PassImages
+from .tracer.passes import DEPTH, NO_HIT_DEPTH, PassImages
 
 COLORSPACE = "Linear Rec.709"
 
@@ -103,14 +103,14 @@ def exr(path, images: Passes, layer: str, data: PassImages | None = None) -> ima
 
 
 def data_passes(data: PassImages, region: Region | None = None) -> PassImages:
-    """The data passes, placed at `region` in a frame as `passes` places the image (Blender's values outside: no
-    surface, so Depth 1e10 and Mist 1)."""
+    """The data passes, placed at `region` in a frame as `passes` places the image, with F12's values outside:
+    Depth 1e10 (no surface), every other pass 0."""
     if region is None:
         return data
     top = region.full_height - region.y - region.height
     images = {}
     for name, image in data.images.items():
-        fill = NO_HIT_DEPTH if name == DEPTH else 1.0 if name == MIST else 0.0
+        fill = NO_HIT_DEPTH if name == DEPTH else 0.0
         frame = np.full((region.full_height, region.full_width) + image.shape[2:], fill, dtype=image.dtype)
         frame[top:top + region.height, region.x:region.x + region.width] = image
         images[name] = frame

@@ -172,3 +172,33 @@ def test_a_farm_and_the_emulation_name_the_data_passes_they_leave_out(registered
         assert job.scene.settings.passes == ()  # the farm is not asked for them (it would refuse)
     warning = next(w for w in job.warnings if "does not render data passes" in w)
     assert "Depth, Mist, Normal, CryptoObject, CryptoMaterial" in warning
+
+
+def test_render_to_image_and_the_cli_write_the_data_passes_as_f12(registered, tmp_path):
+    """With a Render Region placed in the full frame (Crop off): F12's EXR, Render to Image's and the .blend
+    command line's hold the same data passes, placed alike, with the same Cryptomatte manifests."""
+    from tests.addon.test_render import _run_cli
+
+    scene, _ = surfaces_scene()
+    render = scene.render
+    render.engine = "SPECTRAL_VOLUME"
+    render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    render.filepath = str(tmp_path / "f12.exr")
+    render.use_border, render.use_crop_to_border = True, False
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.25, 0.75, 0.1, 0.6
+    assert bpy.ops.render.render(write_still=True) == {"FINISHED"}
+    assert bpy.ops.spectral.render_image(image_name="Spectral", exr_path=str(tmp_path / "image.exr")) == {"FINISHED"}
+    blend = tmp_path / "passes.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    done = _run_cli("render", blend, "--out", tmp_path / "cli.exr", "--quiet")
+    assert done.returncode == 0, done.stderr
+    f12 = image_io.read_exr(tmp_path / "f12.exr")
+    names = [name for name in f12 if name.split(".")[1] in ("Depth", "Mist", "Normal", "CryptoObject00",
+                                                             "CryptoMaterial01")]
+    assert len(names) == 2 + 3 + 4 + 4
+    inside = f12["ViewLayer.Depth.Z"] < 1e9
+    assert inside.any() and not inside.all()  # the region, and the frame around it
+    for written in ("image.exr", "cli.exr"):
+        channels = image_io.read_exr(tmp_path / written)
+        for name in names:
+            np.testing.assert_allclose(channels[name], f12[name], rtol=1e-6, err_msg=f"{written} {name}")
