@@ -202,3 +202,25 @@ def test_render_to_image_and_the_cli_write_the_data_passes_as_f12(registered, tm
         channels = image_io.read_exr(tmp_path / written)
         for name in names:
             np.testing.assert_allclose(channels[name], f12[name], rtol=1e-6, err_msg=f"{written} {name}")
+
+
+def test_blenders_cryptomatte_node_finds_the_layers_of_an_exr_the_tracer_wrote(registered, tmp_path):
+    """The Cryptomatte node (source Image) lists the EXR's Cryptomatte layers from its metadata: the names
+    and manifests are where Blender looks for them."""
+    from addon.tracer import builders
+
+    from tests.support import scenes as s
+
+    floor = builders.parallelogram((-20.0, -20.0, 0.0), (40.0, 0.0, 0.0), (0.0, 40.0, 0.0), name="Floor")
+    scene = s.scene(s.ortho_camera(4, 3), lights=[s.environment()], surfaces=[floor], spp=2,
+                    passes=("CryptoObject", "CryptoMaterial"))
+    result = render(scene, backend="numpy")
+    film = result.film
+    path = image_io.write_exr(tmp_path / "tracer.exr", film.xyz, film.rgb(), data=result.passes)
+    image = bpy.data.images.load(str(path))
+    tree = bpy.data.node_groups.new("Compositing", "CompositorNodeTree")
+    node = tree.nodes.new("CompositorNodeCryptomatteV2")
+    node.source, node.image = "IMAGE", image
+    node.layer_name = "ViewLayer.CryptoMaterial"  # an unknown layer would raise: the enum lists the file's
+    with pytest.raises(TypeError, match="'ViewLayer.CryptoObject', 'ViewLayer.CryptoMaterial'"):
+        node.layer_name = "ViewLayer.CryptoAsset"
