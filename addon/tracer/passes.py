@@ -121,27 +121,27 @@ def matte_names(scene, kind: str) -> list[str]:
 
 
 def render_passes(scene, kernel_scene: KernelScene, spp: int, seed: int, backend: str = "numba") -> PassImages:
-    """The data passes `scene.settings.passes` asks for (module docstring), from spp first hits per pixel."""
+    """The data passes `scene.settings.passes` asks for (module docstring), from spp first hits per pixel, in
+    chunks of rows and samples of about FIRST_HIT_BYTES (Cryptomatte's per-name counts included)."""
     settings = scene.settings
     wanted = set(settings.passes)
     if not wanted:
         return PassImages({}, {})
-    if backend == "numba":
-        from .kernels.first_hit import first_hits as find
-    else:
-        from .kernels.numpy_backend import first_hits as find
+    find = first_hit_function(backend)
     camera, surfaces = kernel_scene.camera, kernel_scene.surfaces
     width, height = camera.width, camera.height
     mattes = {kind: _matte_table(scene, kind) for kind in (CRYPTO_OBJECT, CRYPTO_MATERIAL) if kind in wanted}
     depth = np.full((height, width), NO_HIT_DEPTH)
     mist = np.zeros((height, width))
     normal = np.zeros((height, width, 3))
-    counts = {kind: np.zeros((height, width, len(ids)), np.int32) for kind, (ids, _) in mattes.items()}
+    levels = {kind: np.zeros((height, width, 2 * settings.cryptomatte_depth)) for kind in mattes}
     exponent = MIST_FALLOFFS[settings.mist_falloff]
+    names = sum(len(ids) for ids, _ in mattes.values())
     samples = max(1, min(spp, FIRST_HIT_BYTES // (8 * FIRST_HIT_VALUES * width)))
-    rows = max(1, FIRST_HIT_BYTES // (8 * FIRST_HIT_VALUES * width * samples))
+    rows = max(1, FIRST_HIT_BYTES // (width * (8 * FIRST_HIT_VALUES * samples + 4 * names)))
     for y0 in range(0, height, rows):
         h = min(rows, height - y0)
+        counts = {kind: np.zeros((h, width, len(ids)), np.int32) for kind, (ids, _) in mattes.items()}
         for begin in range(0, spp, samples):
             count = min(samples, spp - begin)
             values, triangles = np.empty((h, width, count, FIRST_HIT_VALUES)), np.empty((h, width, count), np.int64)
@@ -155,8 +155,9 @@ def render_passes(scene, kernel_scene: KernelScene, spp: int, seed: int, backend
             normal[y0:y0 + h] += values[..., 2:].sum(axis=2)
             owner = kernel_scene.surfaces.surface[np.maximum(triangles, 0)]
             for kind, (ids, of_surface) in mattes.items():
-                matte = np.where(hit, of_surface[owner], -1)
-                _count(counts[kind][y0:y0 + h], matte, len(ids))
+                _count(counts[kind], np.where(hit, of_surface[owner], -1), len(ids))
+        for kind, (ids, _) in mattes.items():
+            levels[kind][y0:y0 + h] = _ranked(counts[kind], ids, spp, settings.cryptomatte_depth)
     images = {}
     if DEPTH in wanted:
         images[DEPTH] = depth[..., None]
@@ -164,9 +165,32 @@ def render_passes(scene, kernel_scene: KernelScene, spp: int, seed: int, backend
         images[MIST] = (1.0 - mist / spp)[..., None]
     if NORMAL in wanted:
         images[NORMAL] = normal / spp
-    for kind, (ids, _) in mattes.items():
-        images.update(_ranked(kind, counts[kind], ids, spp, settings.cryptomatte_depth))
+    for kind in mattes:
+        images.update(_in_passes(kind, levels[kind]))
     return PassImages(images, {kind: ids for kind, (ids, _) in mattes.items()})
+
+
+def first_hit_function(backend: str):
+    """The first-hit kernel of a backend: the Numba kernel, or the NumPy backend's oracle."""
+    if backend == "numba":
+        from .kernels.first_hit import first_hits
+    else:
+        from .kernels.numpy_backend import first_hits
+    return first_hits
+
+
+def first_hit_ready(kernel_scene: KernelScene, cancel=None, notice=None) -> bool:
+    """Compile the Numba first-hit kernel for the scene's argument types (or load it from the kernel cache),
+    cancellably, telling `notice` as the path tracer's kernel does (`numba_cache.ready`); False if cancelled."""
+    import numba
+
+    from .kernels import first_hit, numba_cache
+
+    one = np.int64(1)
+    arguments = (kernel_scene.camera, kernel_scene.surfaces, one, one, one, one, one, one, np.uint64(0),
+                 np.empty((1, 1, 1, FIRST_HIT_VALUES)), np.empty((1, 1, 1), np.int64))
+    signature = tuple(numba.typeof(argument) for argument in arguments)
+    return numba_cache.ready(first_hit.first_hits, lambda: first_hit.first_hits.compile(signature), cancel, notice)
 
 
 def _matte_table(scene, kind: str) -> tuple[list[str], np.ndarray]:
@@ -184,17 +208,23 @@ def _count(counts: np.ndarray, matte: np.ndarray, mattes: int) -> None:
     counts += flat.reshape(h, w, mattes + 1)[..., 1:].astype(np.int32)
 
 
-def _ranked(kind: str, counts: np.ndarray, names: list[str], spp: int, depth: int) -> dict:
-    """The Cryptomatte passes of one kind: each pixel's `depth` mattes of most coverage, in pairs per pass."""
+def _ranked(counts: np.ndarray, names: list[str], spp: int, depth: int) -> np.ndarray:
+    """Each pixel's `depth` names of most samples in `counts` (h, w, names), as (id, coverage) pairs: (h, w,
+    2 depth), empty levels 0."""
     height, width, _ = counts.shape
     ids = np.array([hash_float(name) for name in names] + [0.0], np.float32)
     padded = np.concatenate((counts, np.zeros((height, width, depth), np.int32)), axis=2)
     order = np.argsort(-padded, axis=2, kind="stable")[..., :depth]  # ties: the lower index first
     coverage = np.take_along_axis(padded, order, axis=2) / spp
     matte_id = np.where(coverage > 0, ids[np.minimum(order, len(names))], 0.0)
-    levels = np.stack((matte_id, coverage), axis=3).reshape(height, width, 2 * depth)
-    passes = cryptomatte_passes(kind, depth)
-    levels = np.concatenate((levels, np.zeros((height, width, 4 * len(passes) - 2 * depth))), axis=2)
+    return np.stack((matte_id, coverage), axis=3).reshape(height, width, 2 * depth)
+
+
+def _in_passes(kind: str, levels: np.ndarray) -> dict:
+    """Cryptomatte levels (h, w, 2 depth) as the RGBA passes of a kind, two levels each (the last padded)."""
+    height, width, pairs = levels.shape
+    passes = cryptomatte_passes(kind, pairs // 2)
+    levels = np.concatenate((levels, np.zeros((height, width, 4 * len(passes) - pairs))), axis=2)
     return {name: levels[..., 4 * i:4 * i + 4] for i, name in enumerate(passes)}
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import adaptive, sampling
-from .passes import PassImages, render_passes
+from .passes import PassImages, first_hit_ready, render_passes
 from .errors import SpectralError
 from .film import Film
 from .kernels.layout import KernelScene
@@ -201,6 +201,8 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)
     data_passes = PassImages({}, {})
+    if settings.passes and backend == "numba" and not cancelled:
+        cancelled = not first_hit_ready(bands[0], cancel, notice)
     if settings.passes and not cancelled:
         with KERNEL_LAUNCH:
             data_passes = render_passes(scene, bands[0], spp, seed, backend)

@@ -174,3 +174,22 @@ def test_cli_names_an_unknown_pass(tmp_path):
     folder = scene_io.save_scene(_scene(s.ortho_camera(4, 3), [_floor()], passes=()), tmp_path / "scene")
     with pytest.raises(SpectralError, match="--passes: render.passes\\[0\\]: unknown pass 'Emission'"):
         cli.with_passes(scene_io.load_scene(folder), "Emission")
+
+
+def test_chunks_of_rows_and_samples_give_the_same_passes(monkeypatch):
+    """With a tiny memory budget the passes are made a row and a few samples at a time: the same images (Depth
+    from sample 0 of the first chunk, sums and counts over all chunks)."""
+    left = s.parallelogram((-20.0, -20.0, 0.0), (20.0, 0.0, 0.0), (0.0, 40.0, 0.0), 1, name="Left")
+    right = s.parallelogram((0.0, -20.0, 0.0), (20.0, 0.0, 0.0), (0.0, 40.0, 0.0), 1, name="Right")
+    scene = _scene(s.perspective_camera(7, 5, 60.0), [left, right, _floor(size=3.0, name="Mid")], spp=12)
+    whole = _passes(scene)
+    monkeypatch.setattr(passes, "FIRST_HIT_BYTES", 7 * 8 * 5 * 5)  # one row of 5 samples per chunk
+    chunked = _passes(scene)
+    assert whole.images.keys() == chunked.images.keys()
+    for name in whole.images:
+        np.testing.assert_allclose(chunked.images[name], whole.images[name], rtol=1e-12, atol=1e-12, err_msg=name)
+
+
+def test_first_hit_kernel_is_ready_before_the_passes_are_made():
+    scene = _scene(s.ortho_camera(4, 4), [_floor()])
+    assert passes.first_hit_ready(compile_scene(scene)) is True
