@@ -15,6 +15,7 @@ import numpy as np
 from .export.camera import Region, render_region
 from .tracer import denoise, image_io
 from .tracer.image_io import COMBINED, VARIANCE, XYZ
+from .tracer.passes import DEPTH, NO_HIT_DEPTH, PassImages
 
 COLORSPACE = "Linear Rec.709"
 
@@ -96,9 +97,38 @@ def _render_pass(result, name: str, image: np.ndarray) -> None:
     result.layers[0].passes[name].rect.foreach_set(blender_rows(image).ravel())
 
 
-def exr(path, images: Passes, layer: str) -> image_io.Output:
-    """The multilayer EXR of `images`, its channels in the render layer `layer`, as F12 names them."""
-    return image_io.exr(path, images.xyz, images.rgb, images.variance, images.alpha, layer)
+def exr(path, images: Passes, layer: str, data: PassImages | None = None) -> image_io.Output:
+    """The multilayer EXR of `images` and the data passes `data`, its channels in the render layer `layer`, as
+    F12 names them."""
+    return image_io.exr(path, images.xyz, images.rgb, images.variance, images.alpha, layer, data)
+
+
+def data_passes(data: PassImages, region: Region | None = None) -> PassImages:
+    """The data passes, placed at `region` in a frame as `passes` places the image, with F12's values outside:
+    Depth 1e10 (no surface), every other pass 0."""
+    if region is None:
+        return data
+    top = region.full_height - region.y - region.height
+    images = {}
+    for name, image in data.images.items():
+        fill = NO_HIT_DEPTH if name == DEPTH else 0.0
+        frame = np.full((region.full_height, region.full_width) + image.shape[2:], fill, dtype=image.dtype)
+        frame[top:top + region.height, region.x:region.x + region.width] = image
+        images[name] = frame
+    return PassImages(images, data.mattes)
+
+
+def render_data_passes(result, data: PassImages) -> None:
+    """The data passes → the Render Result's passes of the same names (registered by the engine)."""
+    for name, image in data.images.items():
+        _render_pass(result, name, image)
+
+
+def stamp_metadata(full_result, data: PassImages, layer: str) -> None:
+    """Cryptomatte's manifests of render layer `layer` into the metadata (stamp data) of the whole Render Result
+    (`RenderEngine.get_result()`, as Cycles stamps it): F12's EXR header, which the Cryptomatte node reads."""
+    for key, value in data.metadata(layer).items():
+        full_result.stamp_data_add_field(key, value)
 
 
 def store_image(name: str, rgb, alpha=None):
@@ -117,10 +147,12 @@ def store_image(name: str, rgb, alpha=None):
 
 
 def write_outputs(film, image_name: str, exr_path: str = "", layer: str = image_io.VIEW_LAYER,
-                  region: Region | None = None, denoised: bool = False):
-    """The EXR (see `exr`) first, written to a temporary name and renamed, so a failure leaves the old file;
-    then the image. `region`: see `placement`; `denoised`: see `passes`. Returns the image."""
+                  region: Region | None = None, denoised: bool = False, data: PassImages | None = None):
+    """The EXR (see `exr`, with the data passes `data`) first, written to a temporary name and renamed, so a
+    failure leaves the old file; then the image. `region`: see `placement`; `denoised`: see `passes`. Returns
+    the image."""
     images = passes(film, region, denoised)
     if exr_path:
-        image_io.write_all([exr(bpy.path.abspath(exr_path), images, layer)])
+        placed = None if data is None else data_passes(data, region)
+        image_io.write_all([exr(bpy.path.abspath(exr_path), images, layer, placed)])
     return store_image(image_name, images.rgb, images.alpha)

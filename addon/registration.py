@@ -19,11 +19,12 @@ from .operators import presets as preset_operators
 from .operators import render_image
 from .operators import spectrum as spectrum_operators
 from .props import attach, curves, light, material, render, spectrum
-from .ui import lighting, material as material_ui, presets as preset_ui, render as render_ui, sidebar
+from .ui import lighting, material as material_ui, passes as passes_ui, presets as preset_ui, render as render_ui
+from .ui import sidebar
 
 MODULES = (curves, spectrum, material, light, render, attach, render_engine, eevee_stand_in, kernel_warmup,
            spectrum_operators, preset_operators, albedo_levels, export_operators, import_operators,
-           emulation_operators, render_image, preset_ui, material_ui, lighting, render_ui, sidebar, cli)
+           emulation_operators, render_image, preset_ui, material_ui, lighting, render_ui, passes_ui, sidebar, cli)
 
 
 def register():

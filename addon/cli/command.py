@@ -162,7 +162,8 @@ def _render_frame(scene, frame: int, args, written: list) -> str:
     for warning in job.warnings + ([skipped] if skipped else []):
         say(f"warning: {warning}", sys.stderr)
     images = output.passes(result.film, region, denoised)
-    outputs = [output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name)]
+    outputs = [output.exr(frame_path(args.out, frame), images, bpy.context.view_layer.name,
+                          output.data_passes(result.passes, region))]
     if args.png is not None:
         alpha = images.alpha if scene.render.film_transparent else None
         outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure, alpha))

@@ -19,6 +19,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 
+from ..export.passes import without_passes
 from ..export.scene import Export
 from ..jobs.protocol import Job
 from ..tracer import image_io
@@ -67,6 +68,7 @@ class EmulationJob(Job):
         """With the Render settings' bands and shader (Cycles renders here: `scheduler` is not asked)."""
         settings = scene.spectral
         band_count = settings.emulation_bands if settings.emulation_band_mode == "FIXED" else None
+        export = without_passes(export, "the Cycles emulation")
         return cls(scene, export.scene, export.warnings, band_count=band_count,
                    max_renders=settings.emulation_max_renders, shader=settings.emulation_shader, spp=spp)
 

@@ -39,12 +39,15 @@ import gpu
 from .. import output
 from ..export import rendered
 from ..jobs import kinds
+from ..export.passes import pass_settings
 from ..export.scene import export_scene
 from .thumbnails import preview_scene
 from ..props.render import ENGINE_ID
 from ..tracer.denoise import available as denoise_available, denoised_rgb
 from ..tracer.errors import SpectralError
 from ..tracer.image_io import PASSES
+from ..tracer.passes import DEPTH, MIST, NORMAL, pass_channels
+from ..tracer.scene import RenderSettings
 from ..tracer.progress import Throttle, TimeLeft
 from .viewport_draw import ViewportImage
 from .viewport_render import ViewportRenderer, view_camera
@@ -53,6 +56,7 @@ from .viewport_render import ViewportRenderer, view_camera
 # than 1/RESULT_COST_RATIO of the time between writes (a 1920×1080 film takes a while to convert).
 RESULT_SECONDS = 1.0
 RESULT_COST_RATIO = 10
+PASS_TYPES = {DEPTH: "VALUE", MIST: "VALUE", NORMAL: "VECTOR"}  # the data passes' kinds, as Cycles' (else COLOR)
 
 
 class SpectralVolumeEngine(bpy.types.RenderEngine):
@@ -64,6 +68,10 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
     def update_render_passes(self, scene=None, renderlayer=None):
         for name, channels in PASSES.items():  # the tracer's EXR names, so every EXR of a render reads alike
             self.register_pass(scene, renderlayer, name, len(channels), channels, "COLOR")
+        # the View Layer's data passes, as Cycles registers them (exactly those the engine writes)
+        settings = RenderSettings(**pass_settings(renderlayer, scene.world))
+        for name, channels in pass_channels(settings).items():
+            self.register_pass(scene, renderlayer, name, len(channels), channels, PASS_TYPES.get(name, "COLOR"))
 
     def render(self, depsgraph):
         if rendered.capture(depsgraph):  # Render to Image, Export Scene, the CLI: export only
@@ -105,6 +113,9 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
         if problem is None:
             try:
                 self._write(result, job.result.film)
+                output.render_data_passes(result, job.result.passes)
+                output.stamp_metadata(self.get_result(), job.result.passes, depsgraph.view_layer.name)
+                self.update_result(result)
                 self._denoise(result, job.result.film, settings)
             except SpectralError as error:  # Open Image Denoise failed
                 problem = str(error)

@@ -30,6 +30,7 @@ voxel size, are read from the original objects.
 """
 
 import re
+import dataclasses
 from dataclasses import dataclass, field
 
 import bpy
@@ -41,6 +42,7 @@ from .fluids import fluid_domain, fluid_grids
 from .lights import export_light
 from .media import export_medium, materials, shader_media, volume_material
 from .meshes import voxelise
+from .passes import pass_settings, unmade_warning
 from ..nodes.notes import Notes
 from .volume_fields import VolumeFields
 from .volumes import volume_grids
@@ -155,6 +157,11 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
         raise SpectralError("the scene has no lights: add a sun, point or spot light, give the World a colour, "
                             "or make a volume or a surface glow" + (f" ({warning})" if warning else ""))
     settings = render_settings(settings_scene)
+    if not originals:  # F12 and the command lines: the view layer's data passes (the viewport shows none)
+        settings = dataclasses.replace(settings, **pass_settings(depsgraph.view_layer, settings_scene.world))
+        unmade = unmade_warning(depsgraph.view_layer)
+        if unmade is not None:
+            warnings.append(unmade)
     scene = Scene(camera=camera, media=tuple(media), lights=tuple(lights), surfaces=tuple(surfaces),
                   settings=settings)
     return Export(validated(scene), warnings)

@@ -37,11 +37,12 @@ def _triangles(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return vertices.reshape(-1, 3).astype(np.float64), triangles.reshape(-1, 3), slots
 
 
-def _surface(name, vertices, triangles, look, holdout: bool) -> Surface:
+def _surface(name, vertices, triangles, look, holdout: bool, obj, material) -> Surface:
     used, compact = np.unique(triangles, return_inverse=True)
     return Surface(name=name, vertices=vertices[used], triangles=compact.reshape(-1, 3).astype(np.int32),
                    reflectance=Spectrum(look.reflectance),
-                   emission=Spectrum(look.emission) if look.emits() else None, holdout=holdout or look.holdout)
+                   emission=Spectrum(look.emission) if look.emits() else None, holdout=holdout or look.holdout,
+                   object=obj.name, material=material.name if material is not None else "")
 
 
 def held_out(instance, view_layer, notes: Notes) -> bool:
@@ -82,5 +83,5 @@ def export_surfaces(obj, matrix_world, depsgraph, notes: Notes, holdout: bool = 
         if look is None:
             continue
         name = obj.name + (f" ▸ {material.name if material is not None else 'no material'}" if several else "")
-        surfaces.append(_surface(name, vertices, triangles[slots == index], look, holdout))
+        surfaces.append(_surface(name, vertices, triangles[slots == index], look, holdout, obj, material))
     return surfaces

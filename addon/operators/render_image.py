@@ -75,7 +75,7 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             self.report({"WARNING"}, skipped)
         try:
             image = write_outputs(job.result.film, self.image_name, self.exr_path, context.view_layer.name,
-                                  self._region, denoised)
+                                  self._region, denoised, job.result.passes)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Render not saved: {problem}")
             return {"CANCELLED"}

@@ -22,7 +22,7 @@ from pathlib import Path
 from . import checks
 from .errors import SpectralError
 from .progress import TimeLeft
-from .scene import BACKENDS, SEED_MAX, SPP_MAX
+from .scene import BACKENDS, SEED_MAX, SPP_MAX, check_settings
 
 TIMEOUT_MAX = 86400.0  # seconds (a day): beyond, Dask's and asyncio's timers overflow
 # Local worker processes: each is a Python process of its own with a copy of the scene.
@@ -98,6 +98,9 @@ def _parser() -> argparse.ArgumentParser:
                         help="Film ▸ Transparent: camera rays do not see the background; the EXR's and PNG's alpha "
                              "is 1 − the share they saw (default: the scene's render.transparent)")
     render.add_argument("--threads", type=int, help="worker threads for the numba backend")
+    render.add_argument("--passes", metavar="NAMES",
+                        help="data passes to write in the EXR beside the image, comma-separated: Depth, Mist, Normal, "
+                             "CryptoObject, CryptoMaterial (default: the scene's render.passes)")
     render.add_argument("--stats", type=Path, help="write timing, samples per second and mean XYZ as JSON")
     render.add_argument("--quiet", action="store_true", help="no progress bar")
     farm = render.add_mutually_exclusive_group()
@@ -139,7 +142,7 @@ def _render(args, written: list) -> int:
     from .scene_io import load_scene
 
     _check_options(args)
-    scene = load_scene(args.scene)
+    scene = with_passes(load_scene(args.scene), args.passes)
     if args.transparent:
         scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, transparent=True))
     progress = None if args.quiet else ProgressBar()
@@ -155,7 +158,7 @@ def _render(args, written: list) -> int:
                         progress=progress, notice=progress and progress.notice)
     film = result.film
     alpha = film.alpha if scene.settings.transparent else None
-    outputs = [image_io.exr(args.out, film.xyz, film.rgb(), film.variance, alpha)]
+    outputs = [image_io.exr(args.out, film.xyz, film.rgb(), film.variance, alpha, data=result.passes)]
     if args.png:
         outputs.append(image_io.png(args.png, film.rgb(), alpha=alpha))
     if args.npy:
@@ -166,6 +169,19 @@ def _render(args, written: list) -> int:
     say(f"wrote {args.out} ({film.width}×{film.height}, {result.stats['samples_per_pixel']} spp, "
         f"{result.seconds:.1f} s, {result.stats['pixel_samples_per_second']:.0f} pixel-samples/s)")
     return EXIT_OK
+
+
+def with_passes(scene, names: str | None):
+    """`scene` asking for the data passes named in `names` (--passes: comma-separated), or as it is."""
+    if names is None:
+        return scene
+    passes = tuple(name.strip() for name in names.split(",") if name.strip())
+    settings = dataclasses.replace(scene.settings, passes=passes)
+    try:
+        check_settings(settings, "render")
+    except SpectralError as problem:
+        raise SpectralError(f"--passes: {problem}") from None
+    return dataclasses.replace(scene, settings=settings)
 
 
 def _validate(args) -> int:

@@ -457,6 +457,9 @@ class RenderFarm:
         farm, the cores shared among its workers; otherwise each worker's cores over its Dask threads)."""
         from distributed import as_completed
 
+        if scene.settings.passes:
+            raise SpectralError(f"a farm does not render data passes yet ({', '.join(scene.settings.passes)}): "
+                                "render them on this computer, or turn them off")
         start = time.perf_counter()
         settings = scene.settings
         spp = settings.spp if spp is None else spp

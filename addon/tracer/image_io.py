@@ -3,7 +3,9 @@
 The multilayer EXR's channels are named as Blender names a render's passes (`LAYER.PASS.CHANNEL`):
 `ViewLayer.Combined.R/G/B/A` (linear Rec.709), `ViewLayer.XYZ.X/Y/Z` and `ViewLayer.XYZ Variance.X/Y/Z`.
 `PASSES` is the one list of them: the render engine registers these passes, so F12's EXR, Render to
-Image's and the command lines' are named alike and Blender opens every one as the same render layer.
+Image's and the command lines' are named alike and Blender opens every one as the same render layer. The data
+passes a scene asks for (`passes`: `ViewLayer.Depth.Z`, `ViewLayer.Mist.Z`, `ViewLayer.Normal.X/Y/Z`,
+`ViewLayer.CryptoObject00.R/G/B/A`, …) follow them, with Cryptomatte's metadata in the header.
 
 All files of one command are written together (`write_all`): each to a temporary name beside its
 destination, and only when every one was written are they renamed into place. A failed or cancelled
@@ -169,15 +171,17 @@ def _new_file_mode() -> int:
 
 
 def _write_oiio(filename: str, pixels: np.ndarray, channel_names: list[str], pixel_type: str,
-                straight_alpha: bool = False) -> None:
+                straight_alpha: bool = False, attributes: dict | None = None) -> None:
     """Write `pixels` as they are; `straight_alpha`: their colour is already divided by alpha (OpenImageIO would
-    otherwise divide it again for a format whose alpha is straight, as PNG's)."""
+    otherwise divide it again for a format whose alpha is straight, as PNG's); `attributes`: header fields."""
     oiio = _open_image_io()
     height, width, channels = pixels.shape
     spec = oiio.ImageSpec(width, height, channels, pixel_type)
     spec.channelnames = tuple(channel_names)
     if straight_alpha:
         spec.attribute("oiio:UnassociatedAlpha", 1)
+    for key, value in (attributes or {}).items():
+        spec.attribute(key, value)
     if filename.endswith(".exr"):
         spec.attribute("compression", "zip")
     output = oiio.ImageOutput.create(filename)
@@ -204,17 +208,34 @@ def _disk_space_short(filename: str, size: int) -> str:
 
 
 def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None, alpha: np.ndarray | None = None,
-        layer: str = VIEW_LAYER) -> Output:
+        layer: str = VIEW_LAYER, data=None) -> Output:
     """Multilayer EXR of the render layer `layer`: the Combined pass (RGB linear Rec.709, `alpha`, default 1),
-    XYZ and, if given, XYZ Variance (see the module docstring)."""
+    XYZ and, if given, XYZ Variance and the data passes `data` (a `passes.PassImages`; see the module
+    docstring)."""
     alpha = np.ones(xyz.shape[:2]) if alpha is None else alpha
     layers = [rgb, alpha[..., None], xyz]
     names = channel_names(COMBINED, layer) + channel_names(XYZ, layer)
     if variance is not None:
         layers.append(variance)
         names += channel_names(VARIANCE, layer)
-    pixels = finite(np.concatenate(layers, axis=2), path)
-    return Output(check_destination(path, ".exr"), lambda name: _write_oiio(name, pixels, names, "float"))
+    extra, extra_names, attributes = data_layers(data, layer)
+    pixels = finite(np.concatenate(layers + extra, axis=2), path)
+    names += extra_names
+    return Output(check_destination(path, ".exr"), lambda name: _write_oiio(name, pixels, names, "float", attributes))
+
+
+def data_layers(data, layer: str = VIEW_LAYER) -> tuple[list[np.ndarray], list[str], dict]:
+    """The data passes of `data` (a `passes.PassImages`, or None) as EXR layers: their pixels, channel names
+    (`LAYER.PASS.CHANNEL`) and header attributes (Cryptomatte's, its layer names given for `layer`)."""
+    if data is None:
+        return [], [], {}
+    from .passes import CHANNELS
+
+    arrays, names = [], []
+    for pass_name, pixels in data.images.items():
+        arrays.append(pixels)
+        names += [f"{layer}.{pass_name}.{letter}" for letter in CHANNELS.get(pass_name, "RGBA")]
+    return arrays, names, data.metadata(layer)
 
 
 def finite(pixels: np.ndarray, path) -> np.ndarray:
@@ -232,9 +253,9 @@ def finite(pixels: np.ndarray, path) -> np.ndarray:
 
 
 def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None,
-              alpha: np.ndarray | None = None, layer: str = VIEW_LAYER) -> Path:
+              alpha: np.ndarray | None = None, layer: str = VIEW_LAYER, data=None) -> Path:
     """Write `exr(...)` on its own."""
-    return write_all([exr(path, xyz, rgb, variance, alpha, layer)])[0]
+    return write_all([exr(path, xyz, rgb, variance, alpha, layer, data)])[0]
 
 
 def srgb_display(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:

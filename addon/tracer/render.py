@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import adaptive, sampling
+from .passes import PassImages, first_hit_ready, render_passes
 from .errors import SpectralError
 from .film import Film
 from .kernels.layout import KernelScene
@@ -159,6 +160,7 @@ class RenderResult:
     cancelled: bool = False
     seconds: float = 0.0
     stats: dict = field(default_factory=dict)
+    passes: PassImages = field(default_factory=lambda: PassImages({}, {}))  # the data passes the scene asks for (`passes`), once rendered
 
 
 def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, backend: str | None = None,
@@ -200,8 +202,15 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
         done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)
+    data_passes = PassImages({}, {})
+    if settings.passes and backend == "numba" and not cancelled:
+        cancelled = not first_hit_ready(bands[0], cancel, notice)
+    if settings.passes and not cancelled:
+        with KERNEL_LAUNCH:
+            data_passes = render_passes(scene, bands[0], spp, seed, backend)
     seconds = time.perf_counter() - start
-    return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend))
+    return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend),
+                        passes=data_passes)
 
 
 class Adaptive:

@@ -214,6 +214,8 @@ class Surface:
     reflectance: Spectrum  # Lambertian albedo over the wavelength grid, in [0, 1]
     emission: Spectrum | None = None  # radiance leaving both sides, None: not a light
     holdout: bool = False  # camera rays see a hole here (Film ▸ Transparent: alpha 0)
+    object: str = ""  # its Blender object's name, for Cryptomatte ("": the surface's name)
+    material: str = ""  # its material's name, for Cryptomatte ("": the surface's name)
 
 
 @dataclass(frozen=True, eq=False)
@@ -270,6 +272,13 @@ class RenderSettings:
     # Film ▸ Transparent: camera rays that reach the background (the infinite lights) see none of it, and the
     # film's alpha is 1 − the share they saw; the infinite lights still light the scene.
     transparent: bool = False
+    # Data passes written beside the image (`passes.DATA_PASSES`: Depth, Mist, Normal, CryptoObject,
+    # CryptoMaterial), with World ▸ Mist Pass's start, depth and falloff and Cryptomatte's levels.
+    passes: tuple[str, ...] = ()
+    mist_start: float = 5.0
+    mist_depth: float = 25.0
+    mist_falloff: str = "quadratic"  # "quadratic" | "linear" | "inverse_quadratic"
+    cryptomatte_depth: int = 6
 
 
 @dataclass(frozen=True, eq=False)
@@ -342,8 +351,9 @@ def _check_medium(medium: Medium, where: str) -> None:
 
 
 def _check_surface(surface: Surface, where: str) -> None:
-    if not isinstance(surface.name, str):
-        raise SpectralError(f"{where}.name: expected a string, found {checks.shown(surface.name)}")
+    for key in ("name", "object", "material"):
+        if not isinstance(getattr(surface, key), str):
+            raise SpectralError(f"{where}.{key}: expected a string, found {checks.shown(getattr(surface, key))}")
     _check_boolean(surface.holdout, f"{where}.holdout")
     vertices = _float_array(lambda: surface.vertices, f"{where}.vertices")
     if vertices.ndim != 2 or vertices.shape[1] != 3:
@@ -593,6 +603,9 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
                   0.0, 1.0)
     checks.whole_within(settings.min_samples, f"{where}.min_samples", 0)
     _check_boolean(settings.transparent, f"{where}.transparent")
+    from .passes import check_passes  # the passes' rules, where they are made
+
+    check_passes(settings, where)
 
 
 def _check_boolean(value, where: str) -> None:

@@ -53,7 +53,8 @@ _LIGHT_FIELDS = {
     "envmap": {"required": ("image", "basis"), "optional": ("to_world",)},
 }
 _ENVMAP_UNIT = "radiant"  # an envmap's only unit (its strength multiplies its map), so the file may omit it
-_SURFACE = {"required": ("reflectance",), "optional": ("name", "vertices", "triangles", "mesh", "emission", "holdout")}
+_SURFACE = {"required": ("reflectance",), "optional": ("name", "object", "material", "vertices", "triangles", "mesh",
+                                                  "emission", "holdout")}
 _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettings))}
 
 
@@ -292,7 +293,8 @@ def _surface(value, where: str, folder: Path) -> Surface:
     return Surface(name=name, vertices=vertices, triangles=triangles,
                    reflectance=_spectrum(data["reflectance"], f"{where}.reflectance", folder),
                    emission=None if emission is None else _spectrum(emission, f"{where}.emission", folder),
-                   holdout=data.get("holdout", False))
+                   holdout=data.get("holdout", False), object=data.get("object", ""),
+                   material=data.get("material", ""))
 
 
 def _mesh_array(value, where: str, folder: Path) -> np.ndarray:
@@ -367,6 +369,8 @@ def _render(value, where: str) -> RenderSettings:
     values = {key: data.get(key, getattr(defaults, key)) for key in _RENDER["optional"]}
     for key in ("lambda_min", "lambda_max"):
         values[key] = checks.number(values[key], f"{where}.{key}")
+    if isinstance(values["passes"], list):
+        values["passes"] = tuple(values["passes"])
     return RenderSettings(**values)
 
 
@@ -539,6 +543,7 @@ def _surface_json(surface: Surface, index: int, folder: Path) -> dict:
         data["emission"] = _spectrum_json(surface.emission)
     if surface.holdout:
         data["holdout"] = True
+    data.update({key: getattr(surface, key) for key in ("object", "material") if getattr(surface, key)})
     return data
 
 

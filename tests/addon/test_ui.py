@@ -48,7 +48,7 @@ def _scene_with_everything():
 def _context(scene, obj, material=None):
     light = obj.data if obj is not None and obj.type == "LIGHT" else None
     return SimpleNamespace(scene=scene, engine=scene.render.engine, object=obj, active_object=obj,
-                           material=material, light=light, world=scene.world)
+                           material=material, light=light, world=scene.world, view_layer=scene.view_layers[0])
 
 
 def test_every_panel_draws_for_every_object(registered):

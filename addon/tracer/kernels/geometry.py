@@ -1,5 +1,5 @@
-"""Points and directions as components (x, y, z): affine transforms, normalisation, and the camera's ray
-through a point of the film.
+"""Points and directions as components (x, y, z): affine transforms, normalisation, the camera's ray
+through a point of the film, and a point's depth and distance along a camera ray (the data passes).
 
 Plain arithmetic shared by both backends (`shared_math`): one path's scalars in the Numba kernel, arrays of
 paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`).
@@ -49,3 +49,14 @@ def camera_ray(ks, px, py, u1, u2):
         dx, dy, dz = transform_vector(ks.camera.to_world, 0.0, 0.0, -1.0)
     dx, dy, dz = normalize(dx, dy, dz)
     return ox, oy, oz, dx, dy, dz
+
+
+@shared
+def camera_depths(to_world, kind, t, dx, dy, dz):
+    """(camera-space depth, distance from the camera) of the point at t along a camera ray of unit direction d
+    (Cycles' `camera_z_depth` and `camera_distance`): the depth is t (d · the view axis); the distance t for a
+    perspective camera (its rays start at the camera), the depth for an orthographic one (they start on its
+    film plane)."""
+    ax, ay, az = -to_world[0, 2], -to_world[1, 2], -to_world[2, 2]
+    depth = t * (dx * ax + dy * ay + dz * az) / np.sqrt(ax * ax + ay * ay + az * az)
+    return depth, t if kind == CAMERA_PERSPECTIVE else depth

@@ -43,6 +43,8 @@ GREY_SPREAD = 1e-9
 SURFACE_OFFSET = 1e-9
 # The deepest a BVH gets (`bvh.build` falls back to median splits to stay within it), so traversal's stack.
 BVH_MAX_DEPTH = 96
+# A camera ray's first hit, for the data passes (`first_hit`): depth, distance, normal x, y, z.
+FIRST_HIT_VALUES = 5
 
 
 class KernelCamera(NamedTuple):

@@ -39,7 +39,8 @@ TRACER_MODULE = re.compile(r"^(?:[\w.]+\.)?addon\.tracer(?=\.|$)")  # the tracer
 KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.py", "kernels/fluorescent_reservoir.py",
                   "kernels/geometry.py", "kernels/lookups.py", "kernels/dda.py", "kernels/media.py",
                   "kernels/light_sampling.py", "kernels/envmap.py", "phase.py", "binned.py", "planck.py", "shared_math.py",
-                  "wavelengths.py", "kernels/surfaces.py", "constants.py", "kernels/transparency.py")
+                  "wavelengths.py", "kernels/surfaces.py", "constants.py", "kernels/transparency.py",
+                  "kernels/first_hit.py")
 COMPILE_SECONDS_FILE = "compile-seconds.txt"  # in the cache root: how long the last compile on this machine took
 LOADING_MESSAGE = "Loading the kernel…"
 COMPILING = "Compiling the kernel"

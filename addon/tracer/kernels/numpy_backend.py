@@ -27,6 +27,8 @@ which can send a path down another branch). Masked lanes may compute values that
 (1/σ̄ where σ̄ = 0, say), so floating-point warnings are silenced while tracing.
 """
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from ..binned import linear_over_binned, pdf_binned, sample_binned
@@ -35,7 +37,7 @@ from ..planck import planck_radiance
 from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
-from .geometry import camera_ray, normalize, transform_point, transform_vector
+from .geometry import camera_depths, camera_ray, normalize, transform_point, transform_vector
 from .layout import (
     GREY_SPREAD, LIGHT_AREA, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP, SURFACE_OFFSET)
 from .light_sampling import (
@@ -377,6 +379,27 @@ def _closest_hits(ks, origins, directions, t_max):
         closer = t < best_t
         best_t[closer], best[closer] = t[closer], k[nearest[closer]]
     return best_t, best
+
+
+def first_hits(camera, surfaces, x0, y0, width, height, sample_begin, sample_end, seed, values, triangles):
+    """The oracle of `first_hit.first_hits` (the data passes' first hits), testing every triangle: the same rays
+    (band 0's film points), the same `values` and `triangles`."""
+    ks = SimpleNamespace(camera=camera, surfaces=surfaces)
+    samples = sample_end - sample_begin
+    rows, columns, index = np.meshgrid(np.arange(height), np.arange(width), np.arange(samples), indexing="ij")
+    px, py = (x0 + columns).ravel(), (y0 + rows).ravel()
+    with np.errstate(over="ignore"):  # the random numbers' hashes wrap around, as they should
+        keys = pixel_key(seed, 0, (py * camera.width + px).astype(np.uint64))
+        sample = (sample_begin + index.ravel()).astype(np.uint64)
+        u1, u2 = low_discrepancy(keys, sample, np.uint64(1)), low_discrepancy(keys, sample, np.uint64(2))
+    ray = np.broadcast_arrays(*camera_ray(ks, px, py, u1, u2), np.zeros(px.size))[:6]
+    t, k = _closest_hits(ks, np.stack(ray[:3], axis=1), np.stack(ray[3:], axis=1), np.inf)
+    hit = k >= 0
+    depth, distance = camera_depths(camera.to_world, camera.kind, t, *ray[3:])
+    normal = np.stack(facing_normal(ks, np.maximum(k, 0), *ray[3:]), axis=1) * hit[:, None]
+    out = np.column_stack((np.where(hit, depth, np.inf), np.where(hit, distance, np.inf), normal))
+    values[...] = out.reshape(values.shape)
+    triangles[...] = k.reshape(triangles.shape)
 
 
 def _shadow_blocked(ks, origins, directions, distance):

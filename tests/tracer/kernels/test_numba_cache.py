@@ -100,13 +100,14 @@ def _imported(module: Path) -> set[str]:
 
 
 def test_the_key_hashes_exactly_the_modules_the_kernel_compiles_in():
-    """Every module the Numba kernel imports, directly or not, may put code or constants into the compiled
+    """Every module the Numba kernels import, directly or not, may put code or constants into the compiled
     kernel, so its edits must change the key; any other module (the lowering, the light and wavelength
     policies) must not, or editing it recompiles the kernel for every user. `numba_cache` only says where
     the kernel is kept. Numba keys a cached kernel by the class of its KernelScene argument and its fields'
     types, not their names, so KernelScene's module is hashed too."""
-    kernel_imports = _imported(TRACER / "kernels" / "numba_backend.py") - {"kernels/numba_cache.py"}
-    assert kernel_imports == _keyed()
+    kernels = ("numba_backend.py", "first_hit.py")  # the path tracer and the data passes' first hits
+    kernel_imports = set().union(*(_imported(TRACER / "kernels" / kernel) for kernel in kernels))
+    assert kernel_imports - {"kernels/numba_cache.py"} == _keyed()
     assert Path(inspect.getsourcefile(KernelScene)).relative_to(TRACER).as_posix() in _keyed()
 
 

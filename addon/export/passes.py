@@ -1,0 +1,78 @@
+"""A View Layer's render passes → the tracer's data passes (`tracer/passes.py`), and the passes it asks for that the
+engine does not make, named for the render report's warning.
+
+The engine makes Combined, XYZ and XYZ Variance always, and the View Layer's Z (Depth), Mist, Normal and
+Cryptomatte Object and Material (at its Cryptomatte Levels), the Mist pass after the World's Mist Pass settings.
+"""
+
+import dataclasses
+
+from ..tracer.passes import CRYPTO_MATERIAL, CRYPTO_OBJECT, DEPTH, MIST, NORMAL
+
+# The View Layer's toggle of each data pass the engine makes.
+TOGGLES = {DEPTH: "use_pass_z", MIST: "use_pass_mist", NORMAL: "use_pass_normal",
+           CRYPTO_OBJECT: "use_pass_cryptomatte_object", CRYPTO_MATERIAL: "use_pass_cryptomatte_material"}
+# The passes Blender offers that the engine does not make: (owner of the toggle, toggle, name in the report).
+UNMADE = (
+    ("", "use_pass_position", "Position"), ("", "use_pass_vector", "Vector"), ("", "use_pass_uv", "UV"),
+    ("", "use_pass_object_index", "Object Index"), ("", "use_pass_material_index", "Material Index"),
+    ("", "use_pass_diffuse_direct", "Diffuse Direct"), ("", "use_pass_diffuse_indirect", "Diffuse Indirect"),
+    ("", "use_pass_diffuse_color", "Diffuse Color"), ("", "use_pass_glossy_direct", "Glossy Direct"),
+    ("", "use_pass_glossy_indirect", "Glossy Indirect"), ("", "use_pass_glossy_color", "Glossy Color"),
+    ("", "use_pass_transmission_direct", "Transmission Direct"),
+    ("", "use_pass_transmission_indirect", "Transmission Indirect"),
+    ("", "use_pass_transmission_color", "Transmission Color"), ("", "use_pass_subsurface_direct", "Subsurface Direct"),
+    ("", "use_pass_subsurface_indirect", "Subsurface Indirect"), ("", "use_pass_subsurface_color", "Subsurface Color"),
+    ("", "use_pass_emit", "Emission"), ("", "use_pass_environment", "Environment"),
+    ("", "use_pass_ambient_occlusion", "Ambient Occlusion"), ("", "use_pass_shadow", "Shadow"),
+    ("", "use_pass_cryptomatte_asset", "Cryptomatte Asset"), ("", "use_pass_grease_pencil", "Grease Pencil"),
+    ("eevee", "use_pass_volume_direct", "Volume Light"), ("eevee", "use_pass_transparent", "Transparent"),
+    ("cycles", "denoising_store_passes", "Denoising Data"), ("cycles", "pass_debug_sample_count", "Sample Count"),
+    ("cycles", "use_pass_volume_direct", "Volume Direct"), ("cycles", "use_pass_volume_indirect", "Volume Indirect"),
+    ("cycles", "use_pass_shadow_catcher", "Shadow Catcher"),
+)
+FALLOFFS = {"QUADRATIC": "quadratic", "LINEAR": "linear", "INVERSE_QUADRATIC": "inverse_quadratic"}
+
+
+def pass_settings(view_layer, world) -> dict:
+    """The RenderSettings fields of the View Layer's data passes (`passes`, `mist_*`, `cryptomatte_depth`);
+    Mist's settings from the World (Blender's defaults without one)."""
+    fields = {"passes": tuple(name for name, toggle in TOGGLES.items() if getattr(view_layer, toggle)),
+              "cryptomatte_depth": int(view_layer.pass_cryptomatte_depth)}
+    if world is not None:
+        mist = world.mist_settings
+        fields.update(mist_start=float(mist.start), mist_depth=float(mist.depth), mist_falloff=FALLOFFS[mist.falloff])
+    return fields
+
+
+def unmade_passes(view_layer) -> list[str]:
+    """The passes the View Layer asks for that the engine does not make (its AOVs and Light Groups included)."""
+    names = []
+    for owner, toggle, name in UNMADE:
+        settings = getattr(view_layer, owner, None) if owner else view_layer
+        if settings is not None and getattr(settings, toggle, False):
+            names.append(name)
+    names += [f"AOV {aov.name!r}" for aov in view_layer.aovs]
+    names += [f"Light Group {group.name!r}" for group in view_layer.lightgroups]
+    return names
+
+
+def unmade_warning(view_layer) -> str | None:
+    """The render report's warning naming the passes of the View Layer the engine leaves out, or None."""
+    names = unmade_passes(view_layer)
+    if not names:
+        return None
+    return (f"view layer {view_layer.name!r}: the passes {', '.join(names)} are not rendered by this engine (it makes "
+            "Combined, XYZ, XYZ Variance, Z, Mist, Normal and Cryptomatte Object and Material)")
+
+
+def without_passes(export, renderer: str):
+    """`export` (an `Export`) for a renderer that makes no data passes (the Dask farm, the Cycles emulation): its
+    scene asks for none, and a warning names those left out."""
+    wanted = export.scene.settings.passes
+    if not wanted:
+        return export
+    settings = dataclasses.replace(export.scene.settings, passes=())
+    warning = f"{renderer} does not render data passes yet: {', '.join(wanted)} left out of the render"
+    return dataclasses.replace(export, scene=dataclasses.replace(export.scene, settings=settings),
+                               warnings=[*export.warnings, warning])
