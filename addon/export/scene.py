@@ -48,6 +48,7 @@ from .volume_fields import VolumeFields
 from .volumes import volume_grids
 from .surfaces import export_surfaces, held_out
 from .world import export_world
+from ..tracer.validation import validate
 
 
 @dataclass
@@ -171,7 +172,7 @@ def validated(scene: Scene) -> Scene:
     """`scene`, checked; a problem names the Blender object, light or World, not the exported index
     (`lights[0].strength: ...` becomes `light 'Sun' strength: ...`)."""
     try:
-        return scene.validate()
+        return validate(scene)
     except SpectralError as problem:
         def name(match):
             kind, index, rest = match.group(1), int(match.group(2)), match.group(3) or ""

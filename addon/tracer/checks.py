@@ -1,7 +1,7 @@
 """Checks of single values, each raising a SpectralError that starts with `where` (a scene-file path such
 as `media[0].albedo`, or a command-line option) and shows the offending value.
 
-Shared by the scene file reader (types) and `Scene.validate` (ranges), so that a rule and its message
+Shared by the scene file reader (types) and `validation.validate` (ranges), so that a rule and its message
 are written once.
 """
 

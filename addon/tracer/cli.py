@@ -22,7 +22,8 @@ from pathlib import Path
 from . import checks
 from .errors import SpectralError
 from .progress import TimeLeft
-from .scene import BACKENDS, SEED_MAX, SPP_MAX, check_settings
+from .scene import BACKENDS, SEED_MAX, SPP_MAX
+from .validation import check_settings
 
 TIMEOUT_MAX = 86400.0  # seconds (a day): beyond, Dask's and asyncio's timers overflow
 # Local worker processes: each is a Python process of its own with a copy of the scene.

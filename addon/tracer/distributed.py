@@ -47,7 +47,8 @@ from . import render as single
 from .errors import SpectralError
 from .film import Film
 from .render import RenderResult, render_stats
-from .scene import Scene, check_settings
+from .scene import Scene
+from .validation import check_settings
 
 DEFAULT_TIMEOUT = 10.0  # seconds to reach the scheduler and to wait for its first worker
 DEFAULT_TILE_SIZE = 64

@@ -22,7 +22,7 @@ def strength_scale(light: Light, spectrum: Spectrum | None = None, cmf: str = "c
         total = spectrum.integral()
     else:
         total = float(colorimetry.spectrum_to_xyz(spectrum.values, cmf)[1])
-    if not total > 0:  # Scene.validate refuses these with the light's path
+    if not total > 0:  # validation.validate refuses these with the light's path
         raise SpectralError(f"light {light.name or light.kind!r}: its spectrum has no {light.unit} part to scale")
     return light.strength / total
 

@@ -38,6 +38,7 @@ from .majorant import block_size_for, glow_floor, majorant_grid, minorant_grid
 from .scene import Grid, Light, Medium, Scene, Surface
 from .wavelength_modes import default_band, with_band
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
+from .validation import validate
 
 
 def _world_to_padded(grid: Grid) -> np.ndarray:
@@ -353,9 +354,9 @@ def white_y(settings) -> float:
 
 
 def compile_scene(scene: Scene) -> KernelScene:
-    """The kernel data for the whole wavelength range of a valid scene (`Scene.validate`, called here);
+    """The kernel data for the whole wavelength range of a valid scene (`validation.validate`, called here);
     `wavelength_modes.with_band` restricts it to one band."""
-    settings = scene.validate().settings
+    settings = validate(scene).settings
     camera = scene.camera
     lights = _light_arrays(scene.lights, scene.media, settings.cmf)
     surfaces, emissive = _surface_arrays(scene.surfaces, len(scene.lights))

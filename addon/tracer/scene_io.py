@@ -17,10 +17,12 @@ from .errors import SpectralError
 from .files import IMAGE_LIMIT, SCENE_LIMIT, regular_file
 from .film import check_film_memory, film_bytes
 from .grids import load_grid, save_grid_npy
-from .scene import (LIGHT_KINDS, RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
+from .kernels.layout import LIGHT_KINDS
+from .scene import (RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
                     RenderSettings, Scene, Surface)
 from .spectra import Spectrum
 from .wavelengths import GRID
+from .validation import validate
 
 FORMAT = "spectral-volume-scene"
 VERSION = 1
@@ -64,7 +66,7 @@ _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettin
 def load_scene(path) -> Scene:
     """Read and check a scene file (or a folder holding `scene.json`); grids resolve against its folder.
 
-    The reader checks the file's structure and types; `Scene.validate` then checks the values."""
+    The reader checks the file's structure and types; `validation.validate` then checks the values."""
     path = _scene_path(path)
     data = _fields(_read_json(path), "scene", _TOP)
     if data["format"] != FORMAT:
@@ -80,7 +82,7 @@ def load_scene(path) -> Scene:
                      for i, spec in enumerate(_list(data.get("surfaces", []), "surfaces")))
     scene = Scene(camera=camera, media=media, lights=lights, surfaces=surfaces,
                   settings=_render(data.get("render", {}), "render"))
-    return scene.validate()
+    return validate(scene)
 
 
 def _scene_path(path) -> Path:
@@ -274,7 +276,7 @@ def _light(value, where: str, folder: Path) -> Light:
 
 def _surface(value, where: str, folder: Path) -> Surface:
     """A surface: its triangles as `vertices` and `triangles` (inline lists or `.npy` files), or as a `mesh`
-    (an OBJ file); `Scene.validate` checks the values."""
+    (an OBJ file); `validation.validate` checks the values."""
     data = _fields(value, where, _SURFACE)
     if "mesh" in data:
         if "vertices" in data or "triangles" in data:
@@ -351,7 +353,7 @@ def _obj(value, where: str, folder: Path) -> tuple[np.ndarray, np.ndarray]:
 
 def _image(value, where: str, folder: Path) -> np.ndarray:
     """A `.npy` file named relative to the scene's folder: an envmap's image of shape (H, W, 3), a surface's
-    vertices or triangles (`Scene.validate` checks their values)."""
+    vertices or triangles (`validation.validate` checks their values)."""
     if not isinstance(value, str):
         raise SpectralError(f"{where}: expected the name of a .npy file, found {shown(value)}")
     try:
@@ -413,9 +415,9 @@ def _spectrum(value, where: str, folder: Path) -> Spectrum:
 
 
 def save_scene(scene: Scene, folder) -> Path:
-    """Write `scene` (valid: `Scene.validate`) as `folder/scene.json` plus one `.npy` per grid; returns
+    """Write `scene` (valid: `validation.validate`) as `folder/scene.json` plus one `.npy` per grid; returns
     the JSON file's path."""
-    scene.validate()
+    validate(scene)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     data = {

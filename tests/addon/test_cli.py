@@ -65,7 +65,7 @@ def test_an_unwritable_output_is_refused_before_rendering(blend, tmp_path):
 
 
 def test_an_albedo_csv_above_one_is_refused_by_the_scene_rules(registered, tmp_path):
-    """The add-on's CSV albedo was never checked (issue 14): the exported scene meets Scene.validate when it is
+    """The add-on's CSV albedo was never checked (issue 14): the exported scene meets validation.validate when it is
     exported, and the problem names the Blender volume (issue 28), not `media[0]`."""
     from addon.export.scene import export_scene
     from tests.addon.builders import basic_scene

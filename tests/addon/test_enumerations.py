@@ -9,7 +9,8 @@ import pytest
 from addon.export.scene import render_settings
 from addon.tracer import colorimetry, scene as tracer_scene, spectra
 from addon.tracer.kernels import layout
-from addon.tracer.scene import RenderSettings, check_settings
+from addon.tracer.scene import RenderSettings
+from addon.tracer.validation import check_settings
 
 bpy = pytest.importorskip("bpy")
 

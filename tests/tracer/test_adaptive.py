@@ -9,6 +9,7 @@ from addon.tracer.errors import SpectralError
 from addon.tracer.film import Film
 from addon.tracer.render import Tiler, render
 from tests.support import scenes as s
+from addon.tracer.validation import validate
 
 
 def cube_in_the_sky(**settings):
@@ -79,4 +80,4 @@ def test_tiles_cover_every_active_pixel_once_in_boxes_of_them(seed):
                                           ("noise_threshold", float("nan")), ("min_samples", -1)])
 def test_bad_adaptive_settings_are_refused(field, value):
     with pytest.raises(SpectralError, match=f"render.{field}"):
-        cube_in_the_sky(**{field: value}).validate()
+        validate(cube_in_the_sky(**{field: value}))

@@ -1,6 +1,6 @@
 """Envmap lights: the map's orientation (checked against Blender's Environment Texture), the texel sampler and
 its pdf against the map's exact integrals, renders against the uniform environment and from the bright side,
-the scene file and `Scene.validate`.
+the scene file and `validation.validate`.
 
 Statistical checks use fixed seeds and pass within 4 standard errors of the samples' own spread (a correct
 estimator fails with probability ~6e-5 each), or a χ² bound stated at the test.
@@ -22,6 +22,7 @@ from addon.tracer.render import render
 from addon.tracer.scene_io import load_scene, save_scene
 from addon.tracer.wavelengths import GRID
 from tests.support import scenes as s
+from addon.tracer.validation import validate
 
 SIGMAS = 4.0
 
@@ -246,13 +247,13 @@ def _with(**fields):
 ])
 def test_validate_refuses(light, message):
     with pytest.raises(SpectralError) as error:
-        s.scene(s.perspective_camera(4, 4), [s.medium(s.box_grid())], [light]).validate()
+        validate(s.scene(s.perspective_camera(4, 4), [s.medium(s.box_grid())], [light]))
     assert message in str(error.value)
 
 
 def test_a_light_other_than_an_envmap_needs_a_spectrum():
     with pytest.raises(SpectralError, match=r"lights\[0\].spectrum: a sun light needs a spectrum"):
-        s.scene(s.perspective_camera(4, 4), [], [dataclasses.replace(s.sun([0, 0, 1]), spectrum=None)]).validate()
+        validate(s.scene(s.perspective_camera(4, 4), [], [dataclasses.replace(s.sun([0, 0, 1]), spectrum=None)]))
 
 
 def test_the_scene_file_names_a_missing_image(write_scene, scene_data):

@@ -19,6 +19,7 @@ from addon.tracer.render import render
 from addon.tracer.scene_io import load_scene, save_scene
 from tests.tracer.conftest import TINY_INDEX_TO_WORLD, tiny_scene_dict
 from tests.tracer.test_scene_io import leaf_paths, set_path
+from addon.tracer.validation import validate
 
 SEED = 14
 CASES = 30  # mutated scenes per run: the same ones on every machine (a time budget reached fewer on a busy one)
@@ -141,7 +142,7 @@ def run_case(write_scene, data, folder) -> str:
         scene = load_scene(write_scene(data, make_grids=False))
     except SpectralError as problem:
         return refused(problem)
-    assert scene.validate() is scene
+    assert validate(scene) is scene
     written = save_scene(scene, folder / "written")
     rewritten = save_scene(load_scene(written), folder / "rewritten")
     assert same_json(json.loads(rewritten.read_text()), json.loads(written.read_text())), \

@@ -11,7 +11,8 @@ import pytest
 
 from addon.tracer import image_io, lowering, render
 from addon.tracer.errors import SpectralError
-from addon.tracer.scene import DEPTH_MAX, MAX_LIGHT_PEAK, SPP_MAX
+from addon.tracer.scene import DEPTH_MAX, SPP_MAX
+from addon.tracer.validation import MAX_LIGHT_PEAK
 from addon.tracer.scene_io import load_scene
 
 LIGHTS = {

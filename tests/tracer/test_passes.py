@@ -11,6 +11,7 @@ from addon.tracer import cli, image_io, passes, scene_io
 from addon.tracer.errors import SpectralError
 from addon.tracer.lowering import compile_scene
 from tests.support import scenes as s
+from addon.tracer.validation import validate
 
 ALL = passes.DATA_PASSES
 
@@ -133,8 +134,8 @@ def test_settings_checks_name_the_field():
                           (dict(mist_falloff="cubic"), "render.mist_falloff"),
                           (dict(cryptomatte_depth=17), "render.cryptomatte_depth")):
         with pytest.raises(SpectralError, match=field.replace("[", r"\[").replace("]", r"\]")):
-            _scene(s.ortho_camera(4, 4), [_floor()], **change).validate()
-    assert scene.validate() is scene
+            validate(_scene(s.ortho_camera(4, 4), [_floor()], **change))
+    assert validate(scene) is scene
 
 
 def test_scene_file_keeps_the_passes_and_old_scenes_ask_for_none(tmp_path, scene_data, write_scene):

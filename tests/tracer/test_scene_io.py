@@ -16,6 +16,7 @@ from addon.tracer.scene import (BlackbodyEmission, Camera, Fluorescence, Glow, G
 from addon.tracer.scene_io import load_scene, save_scene, validate_scene
 from addon.tracer.spectra import Spectrum
 from addon.tracer.wavelengths import GRID
+from addon.tracer.validation import validate
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "scene-format.md"
 
@@ -424,7 +425,7 @@ def test_any_wrong_value_anywhere_is_a_spectral_error(write_scene, junk):
             pass
 
 
-# ---------------------------------------------------------------------------------------------- Scene.validate
+# ---------------------------------------------------------------------------------------------- validation.validate
 
 
 INVALID_SCENES = {
@@ -480,7 +481,7 @@ def _settings(scene, **changes):
 
 def test_a_valid_scene_validates_to_itself():
     scene = full_scene()
-    assert scene.validate() is scene
+    assert validate(scene) is scene
 
 
 @pytest.mark.parametrize("case", INVALID_SCENES)
@@ -491,7 +492,7 @@ def test_one_validation_for_load_save_and_compile(tmp_path, case):
 
     change, words = INVALID_SCENES[case]
     scene = change(full_scene())
-    for action in (scene.validate, lambda: compile_scene(scene), lambda: save_scene(scene, tmp_path / "out")):
+    for action in (lambda: validate(scene), lambda: compile_scene(scene), lambda: save_scene(scene, tmp_path / "out")):
         with pytest.raises(SpectralError) as error:
             action()
         assert words in str(error.value)

@@ -20,6 +20,7 @@ from addon.tracer.scene import Light, Surface
 from addon.tracer.wavelengths import GRID
 from tests.support import scenes as s
 from tests.tracer.test_transport import assert_within
+from addon.tracer.validation import validate
 
 ALBEDO = s.smooth_ramp(0.2, 0.8, 400.0, 700.0)  # a chromatic reflectance
 
@@ -292,14 +293,14 @@ def test_invalid_surfaces_are_refused_naming_the_field(change, message):
                   reflectance=spectra.constant(0.5))
     surface = Surface(**{**fields, **change})
     with pytest.raises(SpectralError, match=message):
-        s.scene(s.ortho_camera(), [], [s.sun((0, 0, 1))], [surface]).validate()
+        validate(s.scene(s.ortho_camera(), [], [s.sun((0, 0, 1))], [surface]))
 
 
 def test_an_emissive_surface_alone_lights_a_scene():
     lamp = ground(0.5, emission=1.0)
-    s.scene(s.ortho_camera(), [], [], [lamp]).validate()
+    validate(s.scene(s.ortho_camera(), [], [], [lamp]))
     with pytest.raises(SpectralError, match="no lights"):
-        s.scene(s.ortho_camera(), [], [], [ground(0.5)]).validate()
+        validate(s.scene(s.ortho_camera(), [], [], [ground(0.5)]))
 
 
 def test_zero_area_triangles_are_dropped():

@@ -20,6 +20,7 @@ from addon.tracer.scene_io import load_scene, save_scene
 from addon.tracer.wavelengths import GRID
 from tests.support import scenes as s
 from tests.tracer.test_transport import assert_within
+from addon.tracer.validation import validate
 
 SIGMAS = 4.0
 SIGMA = 0.7  # the grey slab's extinction (its optical depth: it is 1 unit thick)
@@ -165,4 +166,4 @@ def test_transparent_and_holdout_round_trip_through_the_scene_file(tmp_path):
 ])
 def test_bad_transparent_and_holdout_values_are_refused_naming_the_field(change, message):
     with pytest.raises(SpectralError, match=message.replace("[", r"\[").replace("]", r"\]")):
-        change(scene(surfaces=[floor()])).validate()
+        validate(change(scene(surfaces=[floor()])))
