@@ -312,7 +312,7 @@ def test_the_host_kernel_replaces_the_portable_one_once_it_is_cached(portable_bu
     host = kernel(tmp_path / "user", monkeypatch)
     assert host(1) == 2 and compiles(host) == 1
     assert numba_cache.ready(dispatcher, lambda: dispatcher(1))
-    assert not numba_cache.serves_portable(dispatcher) and dispatcher(1) == 2
+    assert not numba_cache.serves_portable(dispatcher) and len(dispatcher._cache.retired) == 1 and dispatcher(1) == 2
     assert compiles(dispatcher) == 0 and sum(dispatcher.stats.cache_hits.values()) == 2  # portable, then host's
 
 

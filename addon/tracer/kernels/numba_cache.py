@@ -244,6 +244,7 @@ class KernelCache(FunctionCache):
                                             self._impl.locator.get_source_stamp())
         self.portable = portable
         self.portable_signatures = []
+        self.retired = []  # the portable kernels the host's replaced
 
     def load_overload(self, sig, target_context):
         try:
@@ -311,6 +312,7 @@ def _prefer_host(dispatcher) -> None:
     cache = dispatcher._cache
     codegen = dispatcher.targetctx.codegen()
     if serves_portable(dispatcher) and all(cache.holds(sig, codegen) for sig in cache.portable_signatures):
+        cache.retired += dispatcher.overloads.values()  # kept alive: another thread may be running it
         dispatcher._reset_overloads()  # Numba's own step before recompiling
         cache.portable_signatures.clear()
 
