@@ -9,6 +9,9 @@ The zip carries slimmed copies of the wheels (`slim_wheel`, kept in wheels/slim-
 files in LEFT_OUT, which never run in Blender, are left out, the libraries in STRIPPED lose their symbol
 tables, the rest is compressed with LZMA instead of Deflate, and RECORD lists what is left. Blender keeps
 the wheels beside the files it installs from them, so both count in the installed size.
+
+The zip for the platform the build runs on also carries a portable kernel (`add_prebuilt_kernel`), so
+that the first render after installing it need not compile.
 """
 
 import argparse
@@ -20,6 +23,8 @@ import hashlib
 import importlib.util
 import io
 import json
+import os
+import platform
 import re
 import shutil
 import subprocess
@@ -206,9 +211,45 @@ def build(platforms: list[str], out_dir: Path) -> list[Path]:
         run([sys.executable, str(script), "build", "--source-dir", str(stage),
              "--output-dir", str(out_dir), "--split-platforms"])
     built = [out_dir / f"{manifest['id']}-{manifest['version']}-{p.replace('-', '_')}.zip" for p in platforms]
-    for package in built:
+    for package, name in zip(built, platforms):
+        if name == host_platform():
+            add_prebuilt_kernel(package)
         run([sys.executable, str(script), "validate", str(package)])
     return built
+
+
+def host_platform() -> str:
+    """The Blender platform name of the computer the build runs on."""
+    if sys.platform == "darwin":
+        return "macos-arm64" if platform.machine() == "arm64" else "macos-x64"
+    return {"linux": "linux-x64", "win32": "windows-x64"}.get(sys.platform, sys.platform)
+
+
+# Compiles the kernel for Numba's generic CPU (see add_prebuilt_kernel) and prints its folder.
+PORTABLE_COMPILE = """
+from addon.tracer import background_compile
+from addon.tracer.kernels import numba_cache
+background_compile.compile_kernel()
+print(numba_cache.kernel_folder())
+"""
+
+
+def add_prebuilt_kernel(package: Path) -> None:
+    """Add to `package` the Numba kernel compiled for the generic CPU of this platform, with this Python's
+    Numba (the version the zip bundles), from the sources the zip holds, in the folder of its key under
+    addon/tracer/kernels/prebuilt/ (addon/tracer/kernels/numba_cache.py). It is compiled in a child process
+    into the per-user kernel cache, where later builds of the same sources find it."""
+    env = {**os.environ, "NUMBA_CPU_NAME": "generic", "PYTHONPATH": str(ROOT),
+           "SPECTRAL_VOLUME_NO_PREBUILT": "1"}
+    env.pop("NUMBA_CPU_FEATURES", None)
+    done = subprocess.run([sys.executable, "-c", PORTABLE_COMPILE], cwd=ROOT, env=env, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"error: compiling the portable kernel failed:\n{done.stderr}")
+    folder = Path(done.stdout.strip().splitlines()[-1])
+    files = [folder / "key.json", *sorted(folder.glob("*.nb[ic]"))]
+    with zipfile.ZipFile(package, "a", compression=zipfile.ZIP_DEFLATED) as archive:
+        for file in files:
+            archive.write(file, f"addon/tracer/kernels/prebuilt/{folder.name}/{file.name}")
 
 
 def run(command: list) -> None:

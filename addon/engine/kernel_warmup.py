@@ -1,6 +1,7 @@
 """Starts the tracer's kernel compiling in the background (addon/tracer/background_compile.py) as soon as a
 scene renders with this engine's local Numba kernel: when a file using it loads, and when a scene switches
-to it. The first render then usually finds the kernel compiled instead of compiling it for minutes.
+to it. The first render then usually finds the kernel compiled instead of compiling it for minutes; right
+after installing, it renders with the portable kernel the extension ships meanwhile.
 """
 
 import bpy

@@ -9,7 +9,9 @@ third of the time, and Blender's interface, which runs Python for every panel it
 
 A render that starts while the process compiles waits for it (`wait`, cancellable, telling the user what
 the process said it does: loading or compiling) instead of compiling the same kernel a second time; a
-failed or missing process changes nothing, since the render then compiles the kernel itself. The process
+failed or missing process changes nothing, since the render then compiles the kernel itself. Where the
+extension ships a portable kernel (kernels/numba_cache.py), the render does not wait: it loads that one
+at once, and the process compiles the host's own (never loading the portable one) for the renders after. The process
 is left to finish when Blender quits: it only fills the cache. It writes what it does to
 `background-compile.log` in the kernel's cache folder.
 
@@ -69,9 +71,13 @@ def start() -> bool:
 
 
 def _kernel_loaded() -> bool:
-    """Whether this process has compiled or loaded the Numba kernel already (without importing it)."""
+    """Whether this process has compiled or loaded the Numba kernel for this computer already (without
+    importing it): not the portable one."""
+    from .kernels import numba_cache
+
     kernel = sys.modules.get(f"{PACKAGE}.kernels.numba_backend")
-    return kernel is not None and bool(kernel.render_tile.overloads)
+    return kernel is not None and bool(kernel.render_tile.overloads) and not numba_cache.serves_portable(
+        kernel.render_tile)
 
 
 def child_command(function: str) -> list[str]:
@@ -82,8 +88,12 @@ def child_command(function: str) -> list[str]:
 
 def child_environment() -> dict:
     """This process's environment, with its module search path: in Blender it includes the folder of the
-    extension's bundled wheels (Numba), which a plain Python does not search."""
-    return {**os.environ, "PYTHONPATH": os.pathsep.join(path for path in sys.path if path)}
+    extension's bundled wheels (Numba), which a plain Python does not search. The child compiles the
+    host's kernel: it never loads the shipped portable one."""
+    from .kernels import numba_cache
+
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(path for path in sys.path if path),
+            numba_cache.NO_PREBUILT_VARIABLE: "1"}
 
 
 def started() -> bool:
@@ -99,10 +109,11 @@ def running() -> bool:
 def wait(cancel=None, notice=None) -> bool:
     """Wait for the compile `start` began, if one is running, asking `cancel()` (False when it says stop;
     the compile goes on) and telling `notice` what the process says it does (loading or compiling the
-    kernel, kernels/numba_cache.py's notices, in its log). True when there is nothing (more) to wait for."""
+    kernel, kernels/numba_cache.py's notices, in its log). True when there is nothing (more) to wait for:
+    no compile runs, or the shipped portable kernel renders meanwhile."""
     from .kernels import numba_cache
 
-    if not running():
+    if not running() or numba_cache.prebuilt_folder() is not None:
         return True
     try:
         log = numba_cache.kernel_folder() / LOG_NAME

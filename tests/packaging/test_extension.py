@@ -11,21 +11,11 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-PLATFORM = {"linux": "linux-x64", "win32": "windows-x64"}.get(sys.platform, "macos-arm64")
 MB = 1e6
 # Issue 31's limits for linux-x64: the zip, and all Blender writes when it installs it (the extension's
 # folder, which keeps the wheels, and the packages installed from them).
 ZIP_LIMIT_MB = 80
 INSTALLED_LIMIT_MB = 300
-
-
-@pytest.fixture(scope="module")
-def extension_zip(tmp_path_factory):
-    out = tmp_path_factory.mktemp("dist")
-    subprocess.run([sys.executable, str(ROOT / "tools" / "build_extension.py"), "--platform", PLATFORM,
-                    "--out", str(out)], check=True)
-    (package,) = out.glob("*.zip")
-    return package
 
 
 def test_zip_holds_the_addon_and_wheels_but_no_tests(extension_zip):

@@ -1,6 +1,7 @@
 """Compiling the kernel in a separate process (addon/tracer/background_compile.py): the child imports the
 tracer under the parent's package name and fills the cache folder every import name reads; a render waits
-for it, passing on what it says it does, and that wait can be cancelled."""
+for it, passing on what it says it does, and that wait can be cancelled; where the shipped portable kernel
+serves, a render does not wait."""
 
 import subprocess
 import sys
@@ -94,3 +95,20 @@ def test_waiting_for_the_compile_says_what_it_does_and_can_be_cancelled(monkeypa
         slow.kill()
         slow.wait()
     assert background_compile.wait(cancel=lambda: pytest.fail("nothing to wait for, nothing to ask"))
+
+
+def test_a_render_does_not_wait_for_the_compile_where_the_portable_kernel_serves(monkeypatch, tmp_path):
+    slow = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    monkeypatch.setattr(background_compile, "_process", slow)
+    try:
+        monkeypatch.setattr(numba_cache, "prebuilt_folder", lambda: tmp_path)
+        assert background_compile.wait(cancel=lambda: False) and background_compile.running()
+        monkeypatch.setattr(numba_cache, "prebuilt_folder", lambda: None)
+        assert not background_compile.wait(cancel=lambda: True)  # without one it waits (here: cancelled)
+    finally:
+        slow.kill()
+        slow.wait()
+
+
+def test_the_background_compile_builds_the_hosts_kernel_not_the_portable_one():
+    assert background_compile.child_environment()[numba_cache.NO_PREBUILT_VARIABLE]

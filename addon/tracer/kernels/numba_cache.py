@@ -11,6 +11,13 @@ classes and modules of the tracer) is read under the current one (`_Unpickler`).
 written is still read; a cache that cannot be read means a recompile and one that cannot be written means
 none: the cache never fails a render.
 
+The extension's zip also ships a portable kernel (compiled by `make extension` for Numba's "generic" CPU of
+the build's platform, in PREBUILT under the folder of its own key: `portable_key`). When the host's kernel
+is not cached, that one is loaded (read-only) and renders at once; `background_compile` meanwhile compiles
+the host's kernel, which replaces it at the next render (`ready`). It is used only when its key.json is
+the key the running sources, versions and platform give (`prebuilt_folder`); anything wrong with it
+means a compile, as with the user cache.
+
 `ready` gets the kernel compiled (or loaded) in a helper thread, so that a render can be cancelled
 and can tell the user which of the two it waits for: loading takes seconds, compiling minutes, about as
 long as the last compile on this machine (`COMPILE_SECONDS_FILE`).
@@ -41,6 +48,9 @@ KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.
                   "kernels/light_sampling.py", "kernels/envmap.py", "phase.py", "binned.py", "planck.py", "shared_math.py",
                   "wavelengths.py", "kernels/surfaces.py", "constants.py", "kernels/transparency.py",
                   "kernels/first_hit.py")
+PREBUILT = TRACER / "kernels" / "prebuilt"  # the portable kernel the extension's zip ships (none in a checkout)
+NO_PREBUILT_VARIABLE = "SPECTRAL_VOLUME_NO_PREBUILT"  # set (to anything) to never load it
+PORTABLE_CPU = {"cpu": "generic", "cpu_features": ""}  # what Numba compiles for under NUMBA_CPU_NAME=generic
 COMPILE_SECONDS_FILE = "compile-seconds.txt"  # in the cache root: how long the last compile on this machine took
 LOADING_MESSAGE = "Loading the kernel…"
 COMPILING = "Compiling the kernel"
@@ -84,8 +94,29 @@ def cache_key() -> dict:
     # otherwise (tools/cpu_variants.py compiles for other CPUs).
     cpu = numba.config.CPU_NAME or binding.get_host_cpu_name()
     features = numba.config.CPU_FEATURES if numba.config.CPU_FEATURES is not None else features
-    return {"sources": sources_digest(), "python": sys.implementation.cache_tag,
-            "numba": numba.__version__, "llvmlite": llvmlite.__version__, "cpu": cpu, "cpu_features": features}
+    return {"sources": sources_digest(), "python": sys.implementation.cache_tag, "numba": numba.__version__,
+            "llvmlite": llvmlite.__version__, "platform": binding.get_process_triple(), "cpu": cpu,
+            "cpu_features": features}
+
+
+def portable_key() -> dict:
+    """The key of the portable kernel these sources and versions would ship for this platform."""
+    return {**cache_key(), **PORTABLE_CPU}
+
+
+def prebuilt_folder() -> Path | None:
+    """The shipped portable kernel's folder if it was built from these very sources, versions and platform
+    (its key.json says so) and the host's own kernel is another (not NUMBA_CPU_NAME=generic already);
+    None otherwise, or when NO_PREBUILT_VARIABLE is set."""
+    if os.environ.get(NO_PREBUILT_VARIABLE):
+        return None
+    try:
+        key = portable_key()
+        folder = kernel_folder(PREBUILT, key)
+        shipped = json.loads((folder / "key.json").read_text())
+    except (OSError, ValueError):  # none shipped, or unreadable
+        return None
+    return folder if shipped == key and key != cache_key() else None
 
 
 def kernel_folder(root: Path | None = None, key: dict | None = None) -> Path:
@@ -182,6 +213,12 @@ class _KernelCacheFile(IndexDataCacheFile):
             return _loads(f.read())
 
 
+class _PortableLocator(_Locator):
+    """The locator of the shipped portable kernel's folder."""
+
+    folder: Path | None = None  # set by `cached`
+
+
 class _KernelCacheImpl(CompileResultCacheImpl):
     _locator_classes = [_Locator]
 
@@ -190,22 +227,43 @@ class _KernelCacheImpl(CompileResultCacheImpl):
         return super().rebuild(target_context, payload)
 
 
+class _PortableCacheImpl(_KernelCacheImpl):
+    _locator_classes = [_PortableLocator]
+
+
 class KernelCache(FunctionCache):
     """Numba's function cache in the kernel folder, where any failure to load means a recompile and any
-    failure to save means no cache (a cache from another version, a corrupt, locked or read-only file)."""
+    failure to save means no cache (a cache from another version, a corrupt, locked or read-only file).
+    A kernel the folder lacks is loaded from `portable` (a `_PortableCache`) when given, and those
+    signatures are kept in `portable_signatures`."""
 
     _impl_class = _KernelCacheImpl
 
-    def __init__(self, py_func):
+    def __init__(self, py_func, portable=None):
         super().__init__(py_func)
         self._cache_file = _KernelCacheFile(self._cache_path, self._impl.filename_base,
                                             self._impl.locator.get_source_stamp())
+        self.portable = portable
+        self.portable_signatures = []
+        self.retired = []  # the portable kernels the host's replaced
 
     def load_overload(self, sig, target_context):
         try:
-            return super().load_overload(sig, target_context)
+            loaded = super().load_overload(sig, target_context)
         except Exception:  # noqa: BLE001 - whatever is wrong with the cache, compiling again is right
-            return None
+            loaded = None
+        if loaded is None and self.portable is not None:
+            loaded = self.portable.load_overload(sig, target_context)
+            if loaded is not None:
+                self.portable_signatures.append(sig)
+        return loaded
+
+    def holds(self, sig, codegen) -> bool:
+        """Whether the folder has a kernel for `sig` (compiled since the portable one was loaded)."""
+        try:
+            return self._index_key(sig, codegen) in self._cache_file._load_index()
+        except Exception:  # noqa: BLE001 - an unreadable index holds nothing
+            return False
 
     def save_overload(self, sig, data):
         try:
@@ -214,15 +272,50 @@ class KernelCache(FunctionCache):
             pass
 
 
+class _PortableCache(KernelCache):
+    """The shipped portable kernel, read-only: indexed under the generic CPU Numba compiled it for."""
+
+    _impl_class = _PortableCacheImpl
+
+    def _index_key(self, sig, codegen):
+        signature, (triple, _cpu, _features), hashes = super()._index_key(sig, codegen)
+        return signature, (triple, PORTABLE_CPU["cpu"], PORTABLE_CPU["cpu_features"]), hashes
+
+    def save_overload(self, sig, data):
+        pass  # shipped as built
+
+
 def cached(dispatcher):
     """Give a Numba dispatcher (a kernel declared without `cache=True`) the kernel cache, or no cache
-    when the folder cannot be written."""
+    when the folder cannot be written; with the shipped portable kernel behind it when there is one."""
     _Locator.folder = _usable_folder()
+    _PortableLocator.folder = prebuilt_folder()
     try:
-        dispatcher._cache = KernelCache(dispatcher.py_func) if _Locator.folder is not None else NullCache()
+        portable = _PortableCache(dispatcher.py_func) if _PortableLocator.folder is not None else None
+    except (OSError, RuntimeError):
+        portable = None
+    try:
+        dispatcher._cache = KernelCache(dispatcher.py_func, portable) if _Locator.folder is not None else NullCache()
     except (OSError, RuntimeError):  # RuntimeError: Numba found the folder unusable after all
         dispatcher._cache = NullCache()
     return dispatcher
+
+
+def serves_portable(dispatcher) -> bool:
+    """Whether `dispatcher` renders with the shipped portable kernel (loaded because the host's was not
+    cached)."""
+    return bool(getattr(dispatcher._cache, "portable_signatures", ()))
+
+
+def _prefer_host(dispatcher) -> None:
+    """Drop the portable kernel once the host's own is cached for every signature it served, so that the
+    next compile loads the host's."""
+    cache = dispatcher._cache
+    codegen = dispatcher.targetctx.codegen()
+    if serves_portable(dispatcher) and all(cache.holds(sig, codegen) for sig in cache.portable_signatures):
+        cache.retired += dispatcher.overloads.values()  # kept alive: another thread may be running it
+        dispatcher._reset_overloads()  # Numba's own step before recompiling
+        cache.portable_signatures.clear()
 
 
 def compile_seconds() -> float | None:
@@ -253,7 +346,8 @@ def ready(dispatcher, prepare, cancel=None, notice=None) -> bool:
     asking `cancel()`; if it takes longer than NOTICE_AFTER_SECONDS, tell `notice` whether it loads
     (LOADING_MESSAGE) or compiles (`compiling_message()`; Numba counts a cache miss before it compiles),
     again when that changes. Returns False when cancelled first (the compile goes on in the background
-    and fills the cache)."""
+    and fills the cache). A portable kernel in use is replaced by the host's once that is cached."""
+    _prefer_host(dispatcher)
     misses = sum(dispatcher.stats.cache_misses.values())
     failure = []
 

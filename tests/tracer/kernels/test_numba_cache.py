@@ -4,10 +4,12 @@ saying what it waits for. A tiny function stands in for the kernel (which takes 
 
 import ast
 import inspect
+import json
 import os
 import pickle
 import shutil
 import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -256,3 +258,85 @@ def test_key_folders_unused_for_a_month_are_removed(monkeypatch, tmp_path):
     kernel(tmp_path, monkeypatch)
     assert not old.exists() and recent.exists() and numba_cache.kernel_folder(tmp_path).exists()
     assert unmarked.exists()  # just made by another process, which has not written its key yet
+
+
+# Compiles `add_one` as the build does the shipped kernel: for Numba's generic CPU, into the cache folder
+# given; prints the folder (whose key is then `portable_key()`).
+PORTABLE_BUILD = """
+from numba import njit
+from addon.tracer.kernels import numba_cache
+from tests.tracer.test_numba_cache import add_one
+assert numba_cache.cached(njit(add_one))(1) == 2
+print(numba_cache.kernel_folder())
+"""
+
+
+@pytest.fixture(scope="module")
+def portable_build(tmp_path_factory) -> Path:
+    """The folder of `add_one` compiled for the generic CPU, as tools/build_extension.py ships the kernel."""
+    root = tmp_path_factory.mktemp("portable")
+    env = {**os.environ, "NUMBA_CPU_NAME": "generic", numba_cache.CACHE_DIR_VARIABLE: str(root),
+           "PYTHONPATH": str(TRACER.parent.parent), numba_cache.NO_PREBUILT_VARIABLE: "1"}
+    env.pop("NUMBA_CPU_FEATURES", None)
+    done = subprocess.run([sys.executable, "-c", PORTABLE_BUILD], env=env, capture_output=True, text=True,
+                          check=True, cwd=TRACER.parent.parent)
+    return Path(done.stdout.split()[-1])
+
+
+def shipped(portable_build, monkeypatch, tmp_path, key=None) -> Path:
+    """`portable_build` shipped in a prebuilt folder under `tmp_path` (its key.json replaced by `key`)."""
+    monkeypatch.setattr(numba_cache, "PREBUILT", tmp_path / "prebuilt")
+    monkeypatch.delenv(numba_cache.NO_PREBUILT_VARIABLE, raising=False)
+    folder = numba_cache.kernel_folder(tmp_path / "prebuilt", numba_cache.portable_key())
+    shutil.copytree(portable_build, folder)
+    if key is not None:
+        (folder / "key.json").write_text(json.dumps(key))
+    return folder
+
+
+def test_the_shipped_portable_kernel_renders_when_the_host_has_none(portable_build, monkeypatch, tmp_path):
+    assert json.loads((portable_build / "key.json").read_text()) == numba_cache.portable_key()
+    folder = shipped(portable_build, monkeypatch, tmp_path)
+    assert numba_cache.prebuilt_folder() == folder
+    dispatcher = kernel(tmp_path / "user", monkeypatch)
+    assert dispatcher(1) == 2 and compiles(dispatcher) == 0 and numba_cache.serves_portable(dispatcher)
+    assert not list(numba_cache.kernel_folder(tmp_path / "user").glob("*.nbi"))  # the host's is not cached
+
+
+def test_the_host_kernel_replaces_the_portable_one_once_it_is_cached(portable_build, monkeypatch, tmp_path):
+    shipped(portable_build, monkeypatch, tmp_path)
+    dispatcher = kernel(tmp_path / "user", monkeypatch)
+    assert dispatcher(1) == 2 and numba_cache.serves_portable(dispatcher)
+    numba_cache.ready(dispatcher, lambda: dispatcher(1))
+    assert numba_cache.serves_portable(dispatcher)  # nothing else cached yet: it stays
+    monkeypatch.setenv(numba_cache.NO_PREBUILT_VARIABLE, "1")  # as the background compile runs
+    host = kernel(tmp_path / "user", monkeypatch)
+    assert host(1) == 2 and compiles(host) == 1
+    assert numba_cache.ready(dispatcher, lambda: dispatcher(1))
+    assert not numba_cache.serves_portable(dispatcher) and len(dispatcher._cache.retired) == 1 and dispatcher(1) == 2
+    assert compiles(dispatcher) == 0 and sum(dispatcher.stats.cache_hits.values()) == 2  # portable, then host's
+
+
+@pytest.mark.parametrize("foreign", ["sources", "numba", "platform", "cpu"])
+def test_a_portable_kernel_built_for_other_sources_versions_or_platform_is_not_used(
+        portable_build, monkeypatch, tmp_path, foreign):
+    key = {**numba_cache.portable_key(), foreign: "something else"}
+    shipped(portable_build, monkeypatch, tmp_path, key)
+    assert numba_cache.prebuilt_folder() is None
+    dispatcher = kernel(tmp_path / "user", monkeypatch)
+    assert dispatcher(1) == 2 and compiles(dispatcher) == 1 and not numba_cache.serves_portable(dispatcher)
+
+
+def test_a_broken_portable_kernel_means_a_compile(portable_build, monkeypatch, tmp_path):
+    folder = shipped(portable_build, monkeypatch, tmp_path)
+    for data in folder.glob("*.nbc"):
+        data.write_bytes(b"not a kernel")
+    dispatcher = kernel(tmp_path / "user", monkeypatch)
+    assert dispatcher(1) == 2 and compiles(dispatcher) == 1 and not numba_cache.serves_portable(dispatcher)
+
+
+def test_the_portable_kernel_can_be_switched_off(portable_build, monkeypatch, tmp_path):
+    shipped(portable_build, monkeypatch, tmp_path)
+    monkeypatch.setenv(numba_cache.NO_PREBUILT_VARIABLE, "1")
+    dispatcher = kernel(tmp_path / "user", monkeypatch)
+    assert dispatcher(1) == 2 and compiles(dispatcher) == 1 and not numba_cache.serves_portable(dispatcher)
