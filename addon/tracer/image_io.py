@@ -221,7 +221,7 @@ def exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = No
     extra, extra_names, attributes = data_layers(data, layer)
     pixels = finite(np.concatenate(layers + extra, axis=2), path)
     names += extra_names
-    return Output(check_destination(path, ".exr"), lambda name: _write_oiio(name, pixels, names, "float", attributes))
+    return Output(check_destination(path, ".exr"), lambda name: _write_oiio(name, pixels, names, "float", attributes=attributes))
 
 
 def data_layers(data, layer: str = VIEW_LAYER) -> tuple[list[np.ndarray], list[str], dict]:

@@ -32,7 +32,7 @@ from addon.tracer.wavelengths import GRID
 from tests.support import libm_numpy
 from tests.support import scenes as s
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 SPP = 128
 SIGMAS = 4.0
 
