@@ -211,8 +211,9 @@ def part_oracle(args, found):
     e, path_y = recorder.table()
     image = film.xyz[..., 1]
     z = np.abs(image - reference) / sigma_16
-    print(f"\n2. NumPy oracle, seed 1, 16 spp ({seconds:.0f} s): {e['y'].size} contributions of {path_y.size} paths; "
-          f"its z: {describe(z)}; pixels whose z differs from Numba's by > 0.1: {np.mean(np.abs(z - z_numba) > 0.1):.2%}")
+    print(f"\n2. NumPy oracle, seed 1, 16 spp ({seconds:.0f} s): {e['y'].size} contributions of {path_y.size} "
+          f"paths; its z: {describe(z)}; pixels whose z differs from Numba's by > 0.1: "
+          f"{np.mean(np.abs(z - z_numba) > 0.1):.2%}")
     mean_y = path_y.mean()
     second = np.mean(path_y ** 2)
     print(f"   a path's Y: mean {mean_y:.4f}, E[Y²] {second:.4f}, largest {path_y.max():.2f} "
