@@ -12,7 +12,8 @@ Blender scene exports to the same tracer scene that `scenes` builds in code. Wri
   cubes), "Designed D65", "Designed A" (a pair designed with colour-science), each a cube pair
   collection with a light collection and World;
 - `fire.blend`: fire and smoke domains reading one fluid cache (never simulated);
-- `cloud_shadow.blend`: a cloud over a ground plane (a mesh with a Diffuse BSDF), its shadow on it;
+- `cloud_shadow.blend`: a cloud over a ground plane (a mesh with a Diffuse BSDF), its shadow on it, Film ▸
+  Transparent on;
 - `volumes/`: the VDB files they read (`//volumes/...`): the air and ground, the frog, the inks, the fire's
   cache `fire_cache/data/fluid_data_0001.vdb`, the cloud.
 Rebuilding writes the same content in different bytes (Blender and OpenVDB stamp their files), so
@@ -201,6 +202,7 @@ def build_cloud_shadow(out: Path) -> list:
     scene.world = parts.new_world("Sky", sky, d65)
     _volumes(collection, tracer.media, _vdb(out, "cloud.vdb", {m.name: m.density for m in tracer.media}))
     demo_parts.add_diffuse_surface(collection, tracer.surfaces[0], scenes.GROUND_RGB)
+    scene.render.film_transparent = True
     return [scene]
 
 

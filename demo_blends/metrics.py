@@ -330,6 +330,25 @@ def cloud_shadow(scene, xyz: np.ndarray, lit_depth: float = 0.01, shadow_depth: 
             "lit_pixels": int(lit.sum()), "lit_closed_form_Y": lit_ground_luminance(scene, ground)}
 
 
+def alpha_coverage(scene, alpha: np.ndarray, seen_depth: float = 0.05) -> dict:
+    """Film ▸ Transparent's alpha against its closed form: where the camera sees the sky through the cloud
+    (optical depth above `seen_depth`), the mean alpha and the mean 1 − e^(−τ) of the (grey) cloud along each
+    pixel's ray; where it sees the sky alone, the mean alpha (0); on the ground, the mean alpha (1, less the
+    pixels on its far edge, which see some sky)."""
+    cloud = medium(scene, "cloud")
+    (ground,) = scene.surfaces
+    half = np.abs(ground.vertices[:, :2]).max()
+    points = plane_hits(scene.camera, 2, 0.0)
+    with np.errstate(invalid="ignore"):
+        on_ground = (np.abs(points[..., 0]) < half) & (np.abs(points[..., 1]) < half)
+    seen = cloud.density_scale * column_density(scene.camera, cloud.density)
+    through_cloud, clear_sky = ~on_ground & (seen > seen_depth), ~on_ground & (seen == 0.0)
+    return {"cloud_alpha": float(alpha[through_cloud].mean()),
+            "cloud_closed_form": float((1.0 - np.exp(-seen[through_cloud])).mean()),
+            "cloud_pixels": int(through_cloud.sum()), "sky_alpha": float(alpha[clear_sky].mean()),
+            "sky_pixels": int(clear_sky.sum()), "ground_alpha": float(alpha[on_ground].mean())}
+
+
 def lit_ground_luminance(scene, ground) -> float:
     """Closed form of a Lambertian ground's luminance under the scene's sun and its uniform sky, unshadowed
     (the cloud's small share of the sky left out): ρ (E cos θ + π L) / π, with ρ the reflectance weighted by the

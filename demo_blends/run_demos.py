@@ -90,8 +90,11 @@ def _fire_lines(f: dict) -> list[str]:
 
 
 def _shadow_lines(f: dict) -> list[str]:
-    return [f"shadow contrast {f['contrast']:.1f}:1 on the ground; lit ground Y {f['lit ground']['Y']:.4f}, closed form "
-            f"{f['lit_closed_form_Y']:.4f}"] + [
+    return [f"shadow contrast {f['contrast']:.1f}:1 on the ground; lit ground Y {f['lit ground']['Y']:.4f}, "
+            f"closed form {f['lit_closed_form_Y']:.4f}",
+            f"Film Transparent: alpha through the cloud {f['alpha']['cloud_alpha']:.3f}, closed form 1 - e^-tau "
+            f"{f['alpha']['cloud_closed_form']:.3f}; sky alone {f['alpha']['sky_alpha']:.4f}; ground "
+            f"{f['alpha']['ground_alpha']:.4f}"] + [
         metrics.format_colour(name, f[name]) for name in ("lit ground", "shadow")]
 
 
@@ -124,6 +127,7 @@ class Result:
     scene: Scene  # the tracer scene the add-on exported from the .blend
     xyz: np.ndarray
     variance: np.ndarray
+    alpha: np.ndarray  # 1 everywhere unless the scene's film is transparent
     seconds: float
     exposure: float
     figures: dict = field(default_factory=dict)
@@ -169,7 +173,8 @@ def render_demo(demo: Demo, blends: Path, scale: float, quality: float) -> Resul
     scene = replace(export.scene, settings=replace(export.scene.settings, spp=spp))
     rendered = render_tracer(scene)
     film = rendered.film
-    return Result(demo, scene, film.xyz, film.variance, rendered.seconds, blender_scene.view_settings.exposure)
+    return Result(demo, scene, film.xyz, film.variance, film.alpha, rendered.seconds,
+                  blender_scene.view_settings.exposure)
 
 
 def run(out: Path, scale: float = 1.0, quality: float = 1.0, only=None, denoise: bool = True,
@@ -193,9 +198,11 @@ def run(out: Path, scale: float = 1.0, quality: float = 1.0, only=None, denoise:
                 body, box = ENERGY_BODIES[demo.name]
                 result.figures["energy"] = fluorescence_energy(metrics.medium(result.scene, body), box, 24,
                                                                max(2, round(64 * quality)), 16)
+            if result.scene.settings.transparent:
+                result.figures["alpha"] = metrics.alpha_coverage(result.scene, result.alpha)
             figures_seconds = time.perf_counter() - figures_start
             film_rgb = colorimetry.xyz_to_rgb(result.xyz)
-            image_io.write_exr(out / f"{demo.name}.exr", result.xyz, film_rgb, result.variance)
+            image_io.write_exr(out / f"{demo.name}.exr", result.xyz, film_rgb, result.variance, result.alpha)
             image_io.write_png(out / f"{demo.name}.png",
                                display.display_rgb(result.xyz, result.variance if denoise else None), result.exposure)
             results[demo.name] = result

@@ -388,7 +388,8 @@ def fire(width: int, height: int, spp: int) -> Scene:
 
 # A cumulus-like cloud (the procedural cloud, grey, forward scattering) floating over a grassy ground plane
 # under a sun and a sky: the ground is a surface (a Diffuse BSDF in the .blend), the cloud casts its shadow
-# on it, and the film is transparent where the camera sees the sky, so the render composites over a plate.
+# on it, and the film is transparent (Film ▸ Transparent) where the camera sees the sky, so the render
+# composites over a plate.
 CLOUD_CENTRE = (0.0, 0.0, 1.5)
 CLOUD_SIZE = 2.2  # the cloud's cube, world units
 CLOUD_CELLS = 48
@@ -415,8 +416,8 @@ def ground_plane() -> Surface:
 
 
 def cloud_shadow(width: int, height: int, spp: int) -> Scene:
-    """The cloud, its shadow on the ground, the sky seen past them; D65 sun and sky."""
+    """The cloud, its shadow on the ground, the sky seen past them (transparent: alpha 0); D65 sun and sky."""
     cam = perspective((0.0, -7.0, 2.0), (0.0, 0.0, 1.0), width, height, 45.0)
     light = sun(direction(*SHADOW_SUN), 1.0, spectrum=LIGHTS["D65"], name="sun")
     sky = environment(SHADOW_SKY_STRENGTH, spectrum=LIGHTS["D65"], name="sky")
-    return scene(cam, (cloud_medium(),), (light, sky), (ground_plane(),), spp=spp, seed=SEED)
+    return scene(cam, (cloud_medium(),), (light, sky), (ground_plane(),), spp=spp, seed=SEED, transparent=True)

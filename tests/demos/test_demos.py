@@ -109,3 +109,12 @@ def test_cloud_casts_its_shadow_on_a_ground_lit_as_the_closed_form_says(figures)
     assert f["shadow_pixels"] > 100 and f["lit_pixels"] > 1000
     # Grass-green, in light and in shadow (dominant 561–562 nm).
     assert 540.0 < f["shadow"]["dominant_nm"] < 580.0 and 540.0 < f["lit ground"]["dominant_nm"] < 580.0
+
+
+def test_cloud_demo_film_is_transparent_where_the_sky_shows(figures):
+    a = figures["cloud_shadow"]["alpha"]
+    # Through the grey cloud alpha is 1 − e^(−τ) along each pixel's ray: 0.781 against 0.777 at this size (0.775
+    # against 0.773 at full size); the sky alone 0.010 (pixels at the cloud's edge see some of it), the ground 1.
+    assert a["cloud_pixels"] > 200 and a["sky_pixels"] > 500
+    assert a["cloud_alpha"] == pytest.approx(a["cloud_closed_form"], abs=0.02)
+    assert a["sky_alpha"] < 0.03 and a["ground_alpha"] > 0.99
