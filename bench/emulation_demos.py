@@ -25,7 +25,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="spectra
 import bpy  # noqa: E402,F401  (after BLENDER_USER_RESOURCES: Blender reads it at start-up)
 import numpy as np  # noqa: E402
 
-from addon import cli  # noqa: E402
+from addon.cli import command as cli  # noqa: E402
 from addon.cycles_emulation import band_plan  # noqa: E402
 from addon.cycles_emulation.job import EmulationJob  # noqa: E402
 from addon.tracer import colorimetry, spectra  # noqa: E402

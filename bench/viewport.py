@@ -2,7 +2,7 @@
 image, and how often the image refreshes while it refines.
 
 Each demo's .blend is opened in Blender-as-a-module (`addon.cli.command.open_scene`) and shown in a 512×512 view
-through its camera, with `addon.viewport_render.ViewportRenderer` as the engine's `view_update` drives it
+through its camera, with `addon.engine.viewport_render.ViewportRenderer` as the engine's `view_update` drives it
 (Blender-as-a-module has no window to draw in). Once the full view refines, an edit is made (the seed
 changes, so every sample changes) and timed as the viewport's main thread and render thread see it:
 - export: the viewport's export of the scene on the main thread (`export_scene(depsgraph, view=...)`);
@@ -25,7 +25,7 @@ import bpy
 from addon.cli import command as cli
 from addon.jobs import tracer_job
 from addon.export.scene import export_scene
-from addon.viewport_render import ViewportRenderer
+from addon.engine.viewport_render import ViewportRenderer
 from bench.measure import machine
 from demo_blends import build_blends
 from demo_blends.run_demos import addon_registered
