@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.packaging.conftest import PLATFORM
+
 ROOT = Path(__file__).resolve().parents[2]
 MB = 1e6
 # Issue 31's limits for linux-x64: the zip, and all Blender writes when it installs it (the extension's

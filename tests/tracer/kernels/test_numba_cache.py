@@ -265,7 +265,7 @@ def test_key_folders_unused_for_a_month_are_removed(monkeypatch, tmp_path):
 PORTABLE_BUILD = """
 from numba import njit
 from addon.tracer.kernels import numba_cache
-from tests.tracer.test_numba_cache import add_one
+from tests.tracer.kernels.test_numba_cache import add_one
 assert numba_cache.cached(njit(add_one))(1) == 2
 print(numba_cache.kernel_folder())
 """
