@@ -3,7 +3,6 @@ rendered by F12 into the Render Result and the EXR (read back with OpenImageIO),
 named in the render report's warning, and Depth, Mist and Normal against Cycles' own passes."""
 
 import json
-import math
 
 import numpy as np
 import pytest
@@ -82,15 +81,20 @@ def test_export_reads_the_view_layer_and_world_and_warns_of_unmade_passes(regist
     assert "Emission" in warning and "Ambient Occlusion" in warning and "AOV 'mask'" in warning
 
 
-def test_f12_fills_the_render_result_and_the_exr_has_the_passes_and_manifest(registered, tmp_path):
-    scene, _ = surfaces_scene()
-    scene.render.engine = "SPECTRAL_VOLUME"
+def _f12_exr(scene, path) -> dict:
+    """F12 of `scene` by its render engine, written as a 32-bit multilayer EXR at `path`: its channels."""
     settings = scene.render.image_settings
     settings.media_type = "MULTI_LAYER_IMAGE"
     settings.file_format, settings.color_depth = "OPEN_EXR_MULTILAYER", "32"
-    scene.render.filepath = str(tmp_path / "f12.exr")
+    scene.render.filepath = str(path)
     bpy.ops.render.render(write_still=True)
-    channels = image_io.read_exr(scene.render.filepath)
+    return image_io.read_exr(scene.render.filepath)
+
+
+def test_f12_fills_the_render_result_and_the_exr_has_the_passes_and_manifest(registered, tmp_path):
+    scene, _ = surfaces_scene()
+    scene.render.engine = "SPECTRAL_VOLUME"
+    channels = _f12_exr(scene, tmp_path / "f12.exr")
     for name in ("ViewLayer.Depth.Z", "ViewLayer.Mist.Z", "ViewLayer.Normal.X", "ViewLayer.Normal.Z",
                  "ViewLayer.CryptoObject00.R", "ViewLayer.CryptoObject01.A", "ViewLayer.CryptoMaterial00.G"):
         assert name in channels, sorted(channels)
@@ -117,12 +121,7 @@ def test_depth_mist_and_normal_agree_with_cycles(registered, tmp_path):
     scene.render.engine = "CYCLES"
     scene.cycles.device, scene.cycles.samples, scene.cycles.use_denoising = "CPU", 16, False
     scene.cycles.pixel_filter_type, scene.cycles.filter_width = "BOX", 1.0
-    settings = scene.render.image_settings
-    settings.media_type = "MULTI_LAYER_IMAGE"
-    settings.file_format, settings.color_depth = "OPEN_EXR_MULTILAYER", "32"
-    scene.render.filepath = str(tmp_path / "cycles.exr")
-    bpy.ops.render.render(write_still=True)
-    cycles = image_io.read_exr(scene.render.filepath)
+    cycles = _f12_exr(scene, tmp_path / "cycles.exr")
     export = export_scene(bpy.context.evaluated_depsgraph_get())
     ours = render(export.scene, spp=16, backend="numpy").passes.images
 

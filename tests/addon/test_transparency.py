@@ -9,12 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from addon.export.scene import export_scene
 from addon.tracer import colorimetry, image_io
 from addon.tracer.render import render
 from tests.addon.builders import basic_scene
 from tests.addon.test_blender_scene import factory_scene, volume_shader
-from tests.addon.test_surfaces import _plane, _surface_shader
+from tests.addon.test_surfaces import _export, _plane, _surface_shader
 from tests.support.cycles import BLOCK, NOISE_BOUND, blocks, cycles_rgb, look_at
 
 bpy = pytest.importorskip("bpy")
@@ -23,10 +22,6 @@ bpy = pytest.importorskip("bpy")
 @pytest.fixture
 def factory(registered):
     return factory_scene()
-
-
-def _export():
-    return export_scene(bpy.context.evaluated_depsgraph_get())
 
 
 def _material(name, kind, **inputs):
