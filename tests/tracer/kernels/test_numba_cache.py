@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numba
 import pytest
+from llvmlite import binding
 from numba import njit
 
 from addon.tracer.kernels import numba_cache
@@ -283,8 +284,17 @@ def portable_build(tmp_path_factory) -> Path:
     return Path(done.stdout.split()[-1])
 
 
+def host_compiles_for_its_own_cpu(monkeypatch) -> None:
+    """Under tools/cpu_variants.py's generic run this process compiles for the portable CPU itself, where the
+    shipped kernel is rightly not used; the tests of a host with another CPU name the host's own then."""
+    if numba.config.CPU_NAME == numba_cache.PORTABLE_CPU["cpu"]:
+        monkeypatch.setattr(numba.config, "CPU_NAME", binding.get_host_cpu_name())
+
+
 def shipped(portable_build, monkeypatch, tmp_path, key=None) -> Path:
-    """`portable_build` shipped in a prebuilt folder under `tmp_path` (its key.json replaced by `key`)."""
+    """`portable_build` shipped in a prebuilt folder under `tmp_path` (its key.json replaced by `key`), on a
+    host whose own kernel is not the portable one."""
+    host_compiles_for_its_own_cpu(monkeypatch)
     monkeypatch.setattr(numba_cache, "PREBUILT", tmp_path / "prebuilt")
     monkeypatch.delenv(numba_cache.NO_PREBUILT_VARIABLE, raising=False)
     folder = numba_cache.kernel_folder(tmp_path / "prebuilt", numba_cache.portable_key())
@@ -315,6 +325,14 @@ def test_the_host_kernel_replaces_the_portable_one_once_it_is_cached(portable_bu
     assert numba_cache.ready(dispatcher, lambda: dispatcher(1))
     assert not numba_cache.serves_portable(dispatcher) and len(dispatcher._cache.retired) == 1 and dispatcher(1) == 2
     assert compiles(dispatcher) == 0 and sum(dispatcher.stats.cache_hits.values()) == 2  # portable, then host's
+
+
+def test_a_host_compiling_for_the_portable_cpu_uses_its_own_kernel(portable_build, monkeypatch, tmp_path):
+    shipped(portable_build, monkeypatch, tmp_path)
+    assert numba_cache.prebuilt_folder() is not None
+    monkeypatch.setattr(numba.config, "CPU_NAME", numba_cache.PORTABLE_CPU["cpu"])  # NUMBA_CPU_NAME=generic
+    monkeypatch.setattr(numba.config, "CPU_FEATURES", numba_cache.PORTABLE_CPU["cpu_features"])
+    assert numba_cache.prebuilt_folder() is None
 
 
 @pytest.mark.parametrize("foreign", ["sources", "numba", "platform", "cpu"])
