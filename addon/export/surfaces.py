@@ -3,7 +3,8 @@
 The triangles are the evaluated mesh's loop triangles (modifiers and Geometry Nodes applied) in world
 space, at the depsgraph instance's matrix; curves, text, surfaces and metaballs are meshed as Blender's
 renderers mesh them (`Object.to_mesh`); hair curves, point clouds and Grease Pencil are named as not
-rendered. What a material renders as is `nodes.surface.read_surface_shader`;
+rendered. What a material renders as is `nodes.surface.read_surface_shader`, its reflectance the material's
+spectrum where its Spectral Surface is on (`props.material`);
 the triangles of a slot whose material has nothing linked to its Surface are see-through in Cycles and
 are left out, as are meshes without faces. A surface is named after its object, and after its material too
 where the object has several, so that errors and the report name Blender's data. A surface holds out
@@ -15,6 +16,7 @@ import numpy as np
 
 from ..nodes.notes import Notes
 from ..nodes.surface import read_surface_shader
+from ..props.spectrum_values import to_spectrum
 from ..tracer.scene import Surface
 from ..tracer.spectra import Spectrum
 from .media import slot_materials
@@ -37,10 +39,17 @@ def _triangles(mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return vertices.reshape(-1, 3).astype(np.float64), triangles.reshape(-1, 3), slots
 
 
+def _reflectance(look, material) -> Spectrum:
+    """The diffuse reflectance: the material's spectrum where its Spectral Surface is on, else its nodes'."""
+    if material is not None and material.spectral.use_surface:
+        return to_spectrum(material.spectral.reflectance)
+    return Spectrum(look.reflectance)
+
+
 def _surface(name, vertices, triangles, look, holdout: bool, obj, material) -> Surface:
     used, compact = np.unique(triangles, return_inverse=True)
     return Surface(name=name, vertices=vertices[used], triangles=compact.reshape(-1, 3).astype(np.int32),
-                   reflectance=Spectrum(look.reflectance),
+                   reflectance=_reflectance(look, material),
                    emission=Spectrum(look.emission) if look.emits() else None, holdout=holdout or look.holdout,
                    object=obj.name, material=material.name if material is not None else "")
 

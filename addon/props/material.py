@@ -1,4 +1,5 @@
-"""Volume material settings: what a material means to the spectral tracer when its Spectral Volume is on.
+"""Material settings: what a material means to the spectral tracer when its Spectral Volume or Spectral
+Surface is on.
 
 Stored on the Material (`material.spectral`), used by every object the material is on: Volume
 objects, fluid domains and meshes (voxelised). Mirrors the tracer's `Medium`: extinction, an albedo
@@ -6,6 +7,11 @@ table over density levels, anisotropy, phase function, fluorescence and blackbod
 default), the material renders from its volume nodes; turning it on starts the extinction, albedo and
 anisotropy from those nodes (`start_from_nodes`), so the image does not jump. Emission does not carry
 over: a spectral material's glow is thermal (by its absorption and a temperature grid).
+
+Spectral Surface replaces the diffuse colour that a mesh's surface renders with (the Base Color of its
+nodes, `nodes.surface`) by a reflectance spectrum, so that two paints that match under one light can
+differ under another; turning it on starts the spectrum from the nodes' colour (`start_surface_from_nodes`).
+The surface's emission and holdout stay the nodes'.
 """
 
 import bpy
@@ -13,11 +19,12 @@ import numpy as np
 
 from . import curves
 from ..nodes.notes import Notes
+from ..nodes.surface import read_surface_shader
 from ..nodes.volume import Scattering, read_volume_shader
 from ..tracer.wavelengths import GRID
 
 from .spectrum import (SpectralAlbedoSpectrum, SpectralAnisotropySpectrum, SpectralEmissionSpectrum,
-                       SpectralExcitationSpectrum, SpectralExtinctionSpectrum)
+                       SpectralExcitationSpectrum, SpectralExtinctionSpectrum, SpectralReflectanceSpectrum)
 
 
 class SpectralAlbedoLevel(bpy.types.PropertyGroup):
@@ -71,6 +78,18 @@ def _enabled_changed(settings, context) -> None:
         start_from_nodes(settings, context)
 
 
+def start_surface_from_nodes(settings) -> None:
+    """Set a material's reflectance spectrum to the diffuse reflectance its surface nodes render with."""
+    look = read_surface_shader(settings.id_data, Notes())
+    if look is not None:
+        _set_spectrum(settings.reflectance, look.reflectance)
+
+
+def _surface_changed(settings, _context) -> None:
+    if settings.use_surface:
+        start_surface_from_nodes(settings)
+
+
 class SpectralMaterialSettings(bpy.types.PropertyGroup):
     enabled: bpy.props.BoolProperty(name="Spectral Volume", default=False, update=_enabled_changed,
                                     description="Render this material's volume from the spectral settings "
@@ -108,6 +127,11 @@ class SpectralMaterialSettings(bpy.types.PropertyGroup):
                                                description="Kelvin per grid unit")
     temperature_offset: bpy.props.FloatProperty(name="Temperature Offset", default=0.0, soft_min=0.0,
                                                 soft_max=10000.0, description="Kelvin added after scaling")
+    use_surface: bpy.props.BoolProperty(name="Spectral Surface", default=False, update=_surface_changed,
+                                        description="Render this material's surface with the reflectance spectrum "
+                                                    "instead of its nodes' diffuse color (starts from that color)")
+    reflectance: bpy.props.PointerProperty(type=SpectralReflectanceSpectrum, name="Reflectance",
+                                           description="Diffuse reflectance of the surface over wavelength")
     curve_group: bpy.props.PointerProperty(type=bpy.types.NodeTree, name="Curves",
                                            description="Hidden node group holding this material's spectral curves")
 

@@ -112,6 +112,16 @@ class SpectralAlbedoSpectrum(SpectrumFields, bpy.types.PropertyGroup):
                                    default=0.9, min=0.0, max=1.0, subtype="FACTOR")
 
 
+class SpectralReflectanceSpectrum(SpectrumFields, bpy.types.PropertyGroup):
+    """A surface's diffuse reflectance over wavelength, in [0, 1]."""
+
+    ROLE = "reflectance"
+    CURVE_DEFAULT = 0.8
+    source: _source(("CONSTANT", "COLOR", "CURVE", "CSV"), "CONSTANT")
+    value: bpy.props.FloatProperty(name="Reflectance", description="Diffusely reflected fraction of the light",
+                                   default=0.8, min=0.0, max=1.0, subtype="FACTOR")
+
+
 class SpectralExtinctionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     """Extinction per unit density and metre over wavelength (multiplied by the density scale; the scene's
     Unit Scale says how many metres a Blender unit is)."""
@@ -149,5 +159,5 @@ class SpectralEmissionSpectrum(SpectrumFields, bpy.types.PropertyGroup):
     source: _source(("GAUSSIAN", "CURVE", "CSV"), "GAUSSIAN")
 
 
-CLASSES = (SpectralLightSpectrum, SpectralAlbedoSpectrum, SpectralExtinctionSpectrum, SpectralAnisotropySpectrum,
-           SpectralExcitationSpectrum, SpectralEmissionSpectrum)
+CLASSES = (SpectralLightSpectrum, SpectralAlbedoSpectrum, SpectralReflectanceSpectrum, SpectralExtinctionSpectrum,
+           SpectralAnisotropySpectrum, SpectralExcitationSpectrum, SpectralEmissionSpectrum)

@@ -1,4 +1,4 @@
-"""Volume material panels (Properties editor ▸ Material) and the drawing the sidebar shares."""
+"""Material panels (Properties editor ▸ Material: Spectral Volume, Spectral Surface) and the drawing the sidebar shares."""
 
 import bpy
 
@@ -21,6 +21,15 @@ def draw_material_main(layout, material) -> None:
         draw_spectrum(body, settings.anisotropy, "Anisotropy")
     draw_spectrum(body, settings.extinction, "Extinction")
     draw_spectrum(body, settings.albedo, "Albedo")
+
+
+def draw_material_surface(layout, material) -> None:
+    """The surface's reflectance spectrum (Spectral Surface on), else what it renders from."""
+    settings = material.spectral
+    if settings.use_surface:
+        draw_spectrum(layout, settings.reflectance, "Reflectance")
+    else:
+        layout.label(text="Diffuse color from the Surface nodes", icon="NODETREE")
 
 
 def draw_albedo_levels(layout, material) -> None:
@@ -87,6 +96,18 @@ class SPECTRAL_PT_material(MaterialPanel, bpy.types.Panel):
         draw_material_main(layout, context.material)
 
 
+class SPECTRAL_PT_material_surface(MaterialPanel, bpy.types.Panel):
+    bl_label = "Spectral Surface"
+    bl_idname = "SPECTRAL_PT_material_surface"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw_header(self, context):
+        self.layout.prop(context.material.spectral, "use_surface", text="")
+
+    def draw_settings(self, layout, context):
+        draw_material_surface(layout, context.material)
+
+
 class SPECTRAL_PT_material_albedo(MaterialPanel, bpy.types.Panel):
     bl_label = "Albedo by Density"
     bl_idname = "SPECTRAL_PT_material_albedo"
@@ -124,4 +145,4 @@ class SPECTRAL_PT_material_blackbody(MaterialPanel, bpy.types.Panel):
 
 
 CLASSES = (SPECTRAL_UL_albedo_levels, SPECTRAL_PT_material, SPECTRAL_PT_material_albedo,
-           SPECTRAL_PT_material_fluorescence, SPECTRAL_PT_material_blackbody)
+           SPECTRAL_PT_material_fluorescence, SPECTRAL_PT_material_blackbody, SPECTRAL_PT_material_surface)

@@ -224,3 +224,78 @@ def test_an_emissive_panel_lights_a_volume_as_in_cycles(factory, tmp_path):
     print(result)
     assert result.warnings == []
     assert result.delta_e < COLOURED_DELTA_E and result.z < NOISE_BOUND
+
+
+def test_a_spectral_surface_starts_from_its_nodes_colour_and_renders_its_spectrum(factory):
+    """Spectral Surface on: the reflectance starts as the spectrum the Base Color upsampled to (a curve
+    through it every 10 nm), and renders whatever spectrum it is set to; emission and holdout stay the nodes'."""
+    material = bpy.data.objects["Cube"].active_material
+    material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.2, 0.6, 0.1, 1.0)
+    nodes_reflectance = _export().scene.surfaces[0].reflectance
+    material.spectral.use_surface = True
+    assert material.spectral.reflectance.source == "CURVE"
+    (surface,) = _export().scene.surfaces
+    np.testing.assert_allclose(surface.reflectance.values, nodes_reflectance.values, atol=0.01)
+    material.spectral.reflectance.source, material.spectral.reflectance.value = "CONSTANT", 0.3
+    (surface,) = _export().scene.surfaces
+    np.testing.assert_allclose(surface.reflectance.values, 0.3, rtol=1e-6)  # a float32 property
+    material.spectral.use_surface = False
+    np.testing.assert_array_equal(_export().scene.surfaces[0].reflectance.values, nodes_reflectance.values)
+
+
+def _metameric_black() -> np.ndarray:
+    """A reflectance difference on the wavelength grid with no XYZ under D65: a wiggle over the visible
+    range with its projection on the three CMF × D65 rows removed, at most 1 in size."""
+    from addon.tracer.wavelengths import GRID
+
+    d65 = spectra.illuminant("D65").values
+    rows = np.stack([colorimetry.spectrum_to_xyz(np.where(GRID == lam, d65, 0.0)) for lam in GRID])
+    wiggle = np.sin(2 * np.pi * (GRID - 400.0) / 150.0) * ((GRID > 400) & (GRID < 700))
+    black = wiggle - rows @ np.linalg.lstsq(rows, wiggle, rcond=None)[0]
+    return GRID, black / np.abs(black).max()
+
+
+def test_two_paints_that_match_under_daylight_differ_under_tungsten(factory, tmp_path):
+    """Metamerism on surfaces: a flat grey paint of 0.45 and a Spectral Surface paint of 0.45 plus 0.4 × a
+    metameric black of D65 (from a CSV file), side by side under a sun, seen from above. Under a D65 sun
+    they render the same XYZ within noise (4 σ of the halves' means plus 0.5 % for the curve's
+    interpolation); under an illuminant-A sun the second's X is lower by the 9 % that colorimetry gives
+    (its red wiggle is negative where A is strongest), far outside that bound."""
+    from addon.tracer.render import render
+
+    bpy.data.objects.remove(bpy.data.objects["Light"])
+    bpy.data.objects.remove(bpy.data.objects["Cube"])
+    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    factory.render.resolution_x, factory.render.resolution_y = 8, 4
+    factory.spectral.samples, factory.spectral.denoise = 64, False
+    camera = factory.camera
+    camera.location, camera.rotation_euler = (0.0, 0.0, 5.0), (0.0, 0.0, 0.0)
+    wavelengths, black = _metameric_black()
+    csv = tmp_path / "metamer.csv"
+    csv.write_text("".join(f"{lam:g},{0.45 + 0.4 * value:.6f}\n" for lam, value in zip(wavelengths, black)))
+    for name, x, value in (("Flat", -1.0, 0.45), ("Metamer", 1.0, None)):
+        paint = bpy.data.materials.new(name)
+        _surface_shader(paint, "ShaderNodeBsdfDiffuse", Color=(0.5, 0.5, 0.5), Roughness=0.0)
+        paint.spectral.use_surface = True
+        if value is None:
+            paint.spectral.reflectance.source, paint.spectral.reflectance.filepath = "CSV", str(csv)
+        else:
+            paint.spectral.reflectance.source, paint.spectral.reflectance.value = "CONSTANT", value
+        _plane(name, size=2.0, location=(x, 0.0, 0.0), material=paint)
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    factory.collection.objects.link(sun)
+    sun.data.energy, sun.data.angle = 3.0, 0.0
+    sun.data.spectral.enabled = True
+    sun.data.spectral.spectrum.source = "ILLUMINANT"
+    differences = {}
+    for illuminant in ("D65", "A"):
+        sun.data.spectral.spectrum.illuminant = illuminant
+        film = render(_export().scene).film
+        flat, metamer = film.xyz[:, :3].mean(axis=(0, 1)), film.xyz[:, 5:].mean(axis=(0, 1))
+        sigma = np.sqrt(film.variance[:, :3].sum(axis=(0, 1)) + film.variance[:, 5:].sum(axis=(0, 1))) / 12
+        differences[illuminant] = (metamer - flat) / flat, 4 * sigma / flat + 0.005
+        print(illuminant, flat, metamer, differences[illuminant])
+    relative, bound = differences["D65"]
+    assert np.all(np.abs(relative) < bound)
+    relative, bound = differences["A"]
+    assert relative[0] < -0.06 and abs(relative[0]) > 3 * bound[0]

@@ -75,9 +75,10 @@ def test_properties_panels_show_with_the_spectral_engine_only(registered):
     assert not bpy.types.SPECTRAL_PT_material.poll(context) and not bpy.types.SPECTRAL_PT_render.poll(context)
 
 
-@pytest.mark.parametrize("role", ["albedo", "extinction", "anisotropy", "excitation", "emission"])
+@pytest.mark.parametrize("role", ["albedo", "extinction", "anisotropy", "excitation", "emission", "reflectance"])
 def test_material_panels_draw_every_spectrum_source(registered, role):
     scene, volume, material, _lights = _scene_with_everything()
+    material.spectral.use_surface = True  # the Spectral Surface panel draws its reflectance
     spectrum = getattr(material.spectral, role)
     context = _context(scene, volume, material)
     for item in spectrum.bl_rna.properties["source"].enum_items:
