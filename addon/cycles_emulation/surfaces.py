@@ -1,10 +1,15 @@
 """Surface materials in the emulation: a temporary copy of each RGB material whose colours are upsampled to
 spectra (`parameters.reflectance_bands`, or `emitter_bands` for emission colours) and given as their band
 means in the render's R, G and B. Colours that other nodes compute (textures, ramps) cannot be upsampled
-per pixel: they are rendered grey (their luminance, through an RGB to BW node) with a warning.
+per pixel: they are rendered grey (their luminance, through an RGB to BW node) with a warning. A material
+whose Spectral Surface is on has its reflectance spectrum's band means in every albedo input instead (what
+the tracer renders: `export.surfaces`), its other colours upsampled as above.
 """
 
+from ..nodes.surface import albedo_socket
+from ..props.spectrum_values import to_spectrum
 from . import parameters
+from .bands import band_means
 from .shaders import channels
 
 EMISSIVE_SOCKETS = ("Emission Color",)
@@ -26,9 +31,17 @@ def band_material(borrowed, material, members, bands, cmf: str, warnings: list):
     if tree is None:
         return copy
     tree.animation_data_clear()
+    spectral = material.spectral.use_surface
+    albedo = channels(band_means(to_spectrum(material.spectral.reflectance).values, bands, cmf), members) \
+        if spectral else None
     for node in list(tree.nodes):
         for socket in node.inputs:
             if socket.type != "RGBA" or not socket.enabled:
+                continue
+            if spectral and socket.name == albedo_socket(node):
+                if socket.is_linked:
+                    tree.links.remove(socket.links[0])
+                socket.default_value = (*albedo, socket.default_value[3])
                 continue
             if socket.is_linked:
                 _grey(tree, socket)

@@ -37,6 +37,15 @@ _COLOURED = {"ShaderNodeBsdfGlossy": "Color", "ShaderNodeBsdfAnisotropic": "Colo
              "ShaderNodeBsdfRayPortal": "Color", "ShaderNodeBsdfHair": "Color", "ShaderNodeBsdfHairPrincipled": "Color"}
 
 
+def albedo_socket(node) -> str | None:
+    """The input whose colour is the diffuse albedo a surface shader node renders with, or None."""
+    if node.bl_idname == "ShaderNodeBsdfPrincipled":
+        return "Base Color"
+    if node.bl_idname == "ShaderNodeBsdfDiffuse":
+        return "Color"
+    return _COLOURED.get(node.bl_idname)
+
+
 @dataclass(frozen=True)
 class SurfaceLook:
     """Albedo and emitted radiance (W·m⁻²·sr⁻¹·nm⁻¹) over the wavelength grid."""
@@ -88,7 +97,7 @@ def _closure(node, owner, notes, weight, look):
         _follow(node.inputs[1], owner, notes, weight * (1.0 - fac), look)
         _follow(node.inputs[2], owner, notes, weight * fac, look)
     elif kind in _COLOURED:
-        look["reflectance"] += weight * reflectance_spectrum(colour(node, _COLOURED[kind], owner, notes)).values
+        look["reflectance"] += weight * reflectance_spectrum(colour(node, albedo_socket(node), owner, notes)).values
         notes.add(f"{owner} ▸ {node.name}: {node.bl_label or kind} rendered as a diffuse surface of its colour")
     else:
         notes.add(f"{owner} ▸ {node.name}: {node.bl_label or kind} is not a surface shader the exporter converts: "

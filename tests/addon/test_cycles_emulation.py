@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from mathutils import Vector
 
+from addon.cycles_emulation import parameters
 from addon.cycles_emulation.job import EmulationJob
 from addon.cycles_emulation.state import Borrowed
 from addon.cycles_emulation.surfaces import band_material
@@ -364,6 +365,29 @@ def test_animated_colours_do_not_replace_the_band_colours(registered, tmp_path):
         assert copy.node_tree.animation_data is None
         assert tuple(copy.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value) != (0.8, 0.1, 0.05, 1.0)
     assert paint.node_tree.animation_data.action is not None
+
+
+def test_a_spectral_surface_gives_its_spectrum_to_the_albedo_inputs(registered, tmp_path):
+    """With Spectral Surface on, the band copy's albedo input holds the reflectance spectrum's band means, in
+    place of its colour or its texture (as the tracer renders it); the other colours are upsampled as ever."""
+    scene, _cloud = blob_scene(tmp_path, width=16, height=12)
+    paint = bpy.data.materials.new("Paint")
+    tree = paint.node_tree
+    principled = tree.nodes["Principled BSDF"]
+    tree.links.new(tree.nodes.new("ShaderNodeTexChecker").outputs["Color"], principled.inputs["Base Color"])
+    principled.inputs["Emission Color"].default_value = (1.0, 0.5, 0.0, 1.0)
+    paint.spectral.use_surface = True
+    paint.spectral.reflectance.source, paint.spectral.reflectance.value = "CONSTANT", 0.3
+    job = EmulationJob(scene, export_scene(bpy.context.evaluated_depsgraph_get()).scene, band_count=3, spp=2)
+    warnings = []
+    with Borrowed() as borrowed:
+        copy = band_material(borrowed, paint, (0, 1, 2), job.plan.bands, job.plan.cmf, warnings)
+        inputs = copy.node_tree.nodes["Principled BSDF"].inputs
+        assert not inputs["Base Color"].is_linked and warnings == []
+        np.testing.assert_allclose(tuple(inputs["Base Color"].default_value)[:3], 0.3, rtol=1e-6)
+        orange = parameters.emitter_bands((1.0, 0.5, 0.0), job.plan.bands, job.plan.cmf)
+        np.testing.assert_allclose(tuple(inputs["Emission Color"].default_value)[:3], orange, rtol=1e-5)
+    assert principled.inputs["Base Color"].is_linked  # the user's material is untouched
 
 
 def test_render_region_is_the_region_of_the_frame(registered, tmp_path):
