@@ -148,12 +148,12 @@ def _render(args, written: list) -> int:
         scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, transparent=True))
     progress = None if args.quiet else ProgressBar()
     if args.scheduler is not None or args.workers is not None:
-        from . import distributed
+        from . import farm
 
         options = {"tile_size": args.tile_size, "timeout": args.timeout}
-        result = distributed.render(scene, scheduler=args.scheduler, workers=args.workers, spp=args.spp,
-                                    seed=args.seed, backend=args.backend, threads=args.threads, progress=progress,
-                                    **{name: value for name, value in options.items() if value is not None})
+        result = farm.render(scene, scheduler=args.scheduler, workers=args.workers, spp=args.spp, seed=args.seed,
+                             backend=args.backend, threads=args.threads, progress=progress,
+                             **{name: value for name, value in options.items() if value is not None})
     else:
         result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend, threads=args.threads,
                         progress=progress, notice=progress and progress.notice)

@@ -161,10 +161,10 @@ OUTPUTS = st.sampled_from(["a.exr", "a.png", "a.npy", "s.json", "sub/../a.exr", 
        out=OUTPUTS)
 def test_command_line_option_combinations_render_finite_files_or_exit_1_with_a_message(
         write_scene, tmp_path_factory, monkeypatch, capsys, numbers, outputs, out):
-    from addon.tracer import distributed, render
+    from addon.tracer import farm, render
 
     monkeypatch.setattr(render, "render", _quick_render)
-    monkeypatch.setattr(distributed, "render", _quick_render)
+    monkeypatch.setattr(farm, "render", _quick_render)
     folder = tmp_path_factory.mktemp("cli")
     (folder / "dir.exr").mkdir()
     (folder / "sub").mkdir()
