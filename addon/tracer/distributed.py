@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import render
+from . import backends, render
 
 PACKAGES = ("numpy", "numba", "llvmlite")  # their versions must match between client and workers
 
@@ -91,10 +91,7 @@ def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile
     ran = fingerprint(environment(), scene_data.digest(), seed, backend)
     if ran != expected:
         return TaskResult(ran, _worker_address(), None, None, None)
-    if backend == "numba":
-        from .kernels import numba_backend
-
-        numba_backend.set_threads(threads or _threads_per_task())
+    backends.named(backend).kernels.set_threads(threads or _threads_per_task())
     return TaskResult(ran, _worker_address(), *render.render_unit(scene_data.band_scenes[band], band, samples, tile,
                                                                   seed, backend))
 
