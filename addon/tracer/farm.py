@@ -10,8 +10,8 @@ A result whose fingerprint is not the task's (a worker with other code or data, 
 mid-render) is dropped and its task re-run only on the workers none of whose results was refused, so
 workers may join and leave at any time.
 
-Dask is imported only here and only when a farm is opened: the rest of the tracer never needs it (the
-extension bundles Dask's wheels for Blender, which ships none). See docs/distributed.md for starting
+Dask is imported only when a farm is opened, here and by the tasks on the workers (distributed.py): the rest
+of the tracer never needs it (the extension bundles Dask's wheels for Blender, which ships none). See docs/distributed.md for starting
 schedulers and workers.
 """
 
