@@ -8,13 +8,13 @@ third of the time, and Blender's interface, which runs Python for every panel it
 5 ms on every Python call and stalls of up to 2 s, for minutes; bench/README.md).
 
 The process runs `precompile.compile_kernel`. A render that starts while it compiles waits for it (`wait`,
-called by the Numba backend's `prepare` in backends.py; cancellable, telling the user what the process said it
-does: loading or compiling) instead of compiling the same kernel a second time; a failed or missing process
-changes nothing, since the render then compiles the kernel itself. Where the
-extension ships a portable kernel (kernels/numba_cache.py), the render does not wait: it loads that one
-at once, and the process compiles the host's own (never loading the portable one) for the renders after. The process
-is left to finish when Blender quits: it only fills the cache. It writes what it does to
-`background-compile.log` in the kernel's cache folder.
+called by the Numba backend's `prepare` in backends.py; cancellable, telling the user what the process said
+it does: loading or compiling) instead of compiling the same kernel a second time; a failed or missing
+process changes nothing, since the render then compiles the kernel itself. Where the extension ships a
+portable kernel (kernels/numba_cache.py), the render does not wait: it loads that one at once, and the
+process compiles the host's own (never loading the portable one) for the renders after. The process is left
+to finish when Blender quits: it only fills the cache. It writes what it does to `background-compile.log`
+in the kernel's cache folder.
 
 The child imports the tracer under this process's package name ("addon.tracer", or
 "bl_ext.<repo>.<extension>.addon.tracer" in Blender); its parent packages are made empty (their
