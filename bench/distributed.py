@@ -7,7 +7,7 @@ Every render uses one kernel thread per process, so the comparison is between pr
 - alone:     `render.render` in this process (whole-image passes), the reference image;
 - in-process: the distributed task list (same tiles and passes) run one after another here with
              `render.render_unit` and merged by `PassMerger`, without Dask: the cost of tiling alone;
-- 1 worker / N workers: `distributed.render` on a local cluster of 1 and N worker processes.
+- 1 worker / N workers: `farm.RenderFarm` on a local cluster of 1 and N worker processes.
 Speed-up = time(1 worker) / time(N workers) (target ≥ 1.8 for 2 workers on 2 idle cores);
 overhead per task = (time(1 worker) − its set-up − time(in-process)) / tasks. Every image is checked to be
 bit-identical with `alone`. Figures are printed, never asserted: run it on a quiet machine.
@@ -25,11 +25,13 @@ import numpy as np
 # `distributed` package: put the repository root in its place.
 sys.path[0] = str(Path(__file__).resolve().parents[1])
 
-from addon.tracer import distributed, spectra  # noqa: E402
+from addon.tracer import spectra  # noqa: E402
 from addon.tracer import render as single  # noqa: E402
 from addon.tracer.film import Film  # noqa: E402
 from addon.tracer.procedural import cloud_grid  # noqa: E402
 from addon.tracer.builders import environment, medium, scene, sun  # noqa: E402
+from addon.tracer.farm import RenderFarm  # noqa: E402
+from addon.tracer.farm_plan import PassMerger, plan  # noqa: E402
 from addon.tracer.scene import Camera, Scene  # noqa: E402
 
 FULL = {"width": 120, "height": 90, "spp": 128, "tile_size": 32}  # about 30 s on one core
@@ -57,8 +59,8 @@ def in_process(scene: Scene, tile_size: int) -> Film:
     bands = single.band_scenes(scene)
     camera, settings = scene.camera, scene.settings
     film = Film(camera.width, camera.height, len(bands))
-    sizes, tiles, units = distributed.plan(camera.width, camera.height, len(bands), settings.spp, tile_size)
-    merger = distributed.PassMerger(film, sizes, tiles)
+    sizes, tiles, units = plan(camera.width, camera.height, len(bands), settings.spp, tile_size)
+    merger = PassMerger(film, sizes, tiles)
     for unit in units:
         merger.add(unit, *single.render_unit(bands[unit.band], unit.band, unit.samples, unit.tile,
                                              settings.seed, settings.backend))
@@ -68,7 +70,7 @@ def in_process(scene: Scene, tile_size: int) -> Film:
 def on_farm(scene: Scene, workers: int, tile_size: int):
     """(seconds of the render, film, tasks) on a fresh local cluster, after a warm-up render that
     makes every worker load the Numba kernels and receive a scene (not timed)."""
-    with distributed.RenderFarm(workers=workers) as farm:
+    with RenderFarm(workers=workers) as farm:
         farm.render(scene, spp=1, threads=1, tile_size=max(1, min(scene.camera.width, scene.camera.height) // 2))
         seconds, result = timed(lambda: farm.render(scene, threads=1, tile_size=tile_size))
         return seconds, result.film, result.stats

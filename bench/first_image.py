@@ -77,13 +77,12 @@ import sys, time
 start = time.perf_counter()
 import numba
 numba_imported = time.perf_counter()
-from addon.tracer import render, scene_io
-from addon.tracer.kernels import numba_backend
+from addon.tracer import backends, render, scene_io
 tracer_imported = time.perf_counter()
 scene = scene_io.load_scene(sys.argv[1])
 kernel_scene = render.band_scenes(scene)[0]
 loaded = time.perf_counter()
-render.kernel_ready(numba_backend, kernel_scene, scene.settings.seed, None, None)
+backends.named("numba").prepare(kernel_scene, scene.settings.seed, None, None)
 ready = time.perf_counter()
 render.render(scene)
 rendered = time.perf_counter()

@@ -227,9 +227,9 @@ def host_platform() -> str:
 
 # Compiles the kernel for Numba's generic CPU (see add_prebuilt_kernel) and prints its folder.
 PORTABLE_COMPILE = """
-from addon.tracer import background_compile
+from addon.tracer import precompile
 from addon.tracer.kernels import numba_cache
-background_compile.compile_kernel()
+precompile.compile_kernel()
 print(numba_cache.kernel_folder())
 """
 

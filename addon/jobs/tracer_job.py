@@ -26,9 +26,9 @@ def render_tracer(scene: Scene, scheduler: str = "", *, spp: int | None = None, 
     if not scheduler:
         return local.render(scene, spp=spp, progress=progress, cancel=cancel, notice=notice,
                             unit_seconds=unit_seconds)
-    from ..tracer import distributed  # Dask: imported only for a farm
+    from ..tracer import farm  # Dask: imported only for a farm
 
-    return distributed.render(scene, scheduler=scheduler, spp=spp, progress=progress, cancel=cancel)
+    return farm.render(scene, scheduler=scheduler, spp=spp, progress=progress, cancel=cancel)
 
 
 class TracerJob(Job):

@@ -7,20 +7,20 @@ not a thread of Blender's own, because Numba's compiler runs Python: in a thread
 third of the time, and Blender's interface, which runs Python for every panel it draws, would lag (measured:
 5 ms on every Python call and stalls of up to 2 s, for minutes; bench/README.md).
 
-A render that starts while the process compiles waits for it (`wait`, cancellable, telling the user what
-the process said it does: loading or compiling) instead of compiling the same kernel a second time; a
-failed or missing process changes nothing, since the render then compiles the kernel itself. Where the
-extension ships a portable kernel (kernels/numba_cache.py), the render does not wait: it loads that one
-at once, and the process compiles the host's own (never loading the portable one) for the renders after. The process
-is left to finish when Blender quits: it only fills the cache. It writes what it does to
-`background-compile.log` in the kernel's cache folder.
+The process runs `precompile.compile_kernel`. A render that starts while it compiles waits for it (`wait`,
+called by the Numba backend's `prepare` in backends.py; cancellable, telling the user what the process said
+it does: loading or compiling) instead of compiling the same kernel a second time; a failed or missing
+process changes nothing, since the render then compiles the kernel itself. Where the extension ships a
+portable kernel (kernels/numba_cache.py), the render does not wait: it loads that one at once, and the
+process compiles the host's own (never loading the portable one) for the renders after. The process is left
+to finish when Blender quits: it only fills the cache. It writes what it does to `background-compile.log`
+in the kernel's cache folder.
 
 The child imports the tracer under this process's package name ("addon.tracer", or
 "bl_ext.<repo>.<extension>.addon.tracer" in Blender); its parent packages are made empty (their
 `__init__` would import Blender). The kernel cache is shared by every name (kernels/numba_cache.py).
 """
 
-import contextlib
 import os
 import subprocess
 import sys
@@ -34,7 +34,7 @@ POLL_SECONDS = 0.05
 PACKAGE = __name__.rpartition(".")[0]  # the tracer's package, as kernels/numba_cache.py names it
 TRACER = Path(__file__).resolve().parent
 
-# Run by the child: `python -c CHILD package tracer_folder function`, the function of this module to call.
+# Run by the child: `python -c CHILD package tracer_folder function`, the function of precompile.py to call.
 CHILD = """
 import importlib, sys, types
 package, folder, function = sys.argv[1], sys.argv[2], sys.argv[3]
@@ -45,7 +45,7 @@ for depth in range(len(parts) - 1):
     module = types.ModuleType(name)
     module.__path__ = [str(path.parents[len(parts) - depth - 2])]
     sys.modules[name] = module
-getattr(importlib.import_module(package + ".background_compile"), function)()
+getattr(importlib.import_module(package + ".precompile"), function)()
 """
 
 _lock = threading.Lock()
@@ -81,7 +81,7 @@ def _kernel_loaded() -> bool:
 
 
 def child_command(function: str) -> list[str]:
-    """The command that runs `function` of this module in a child process, the tracer imported there under
+    """The command that runs `function` of precompile.py in a child process, the tracer imported there under
     this process's package name."""
     return [sys.executable, "-c", CHILD, PACKAGE, str(TRACER), function]
 
@@ -141,30 +141,3 @@ def _last_notice(log: Path, notices: tuple[str, ...]) -> str | None:
     except (OSError, UnicodeDecodeError):
         return None
     return next((line for line in reversed(lines) if line.startswith(notices)), None)
-
-
-def describe() -> None:
-    """Print the package the tracer was imported as and its kernel cache folder."""
-    from .kernels import numba_cache
-
-    print(f"{numba_cache.PACKAGE} {numba_cache.kernel_folder()}", flush=True)
-
-
-def compile_kernel() -> None:
-    """What the child runs: compile the kernel (or find it in the cache) for the argument types every scene
-    gives it, writing what it does to LOG_NAME in the kernel's cache folder."""
-    from .builders import environment, perspective, scene
-    from .kernels import numba_backend, numba_cache
-    from .lowering import compile_scene
-    from .render import kernel_ready
-
-    folder = numba_cache.kernel_folder()
-    folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / LOG_NAME, "w", encoding="utf-8") as log, contextlib.redirect_stdout(log), \
-            contextlib.redirect_stderr(log):
-        describe()
-        empty = scene(perspective((0.0, -1.0, 0.0), (0.0, 0.0, 0.0), 1, 1, 40.0), (), (environment(),), spp=1)
-        begun = time.perf_counter()
-        kernel_ready(numba_backend, compile_scene(empty), 0, None, lambda text: print(text, flush=True))
-        how = "loaded from the cache" if sum(numba_backend.render_tile.stats.cache_hits.values()) else "compiled"
-        print(f"kernel {how} in {time.perf_counter() - begun:.1f} s", flush=True)

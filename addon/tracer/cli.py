@@ -19,10 +19,10 @@ import time
 import traceback
 from pathlib import Path
 
-from . import checks
+from . import backends, checks
 from .errors import SpectralError
 from .progress import TimeLeft
-from .scene import BACKENDS, SEED_MAX, SPP_MAX
+from .scene import SEED_MAX, SPP_MAX
 from .validation import check_settings
 
 TIMEOUT_MAX = 86400.0  # seconds (a day): beyond, Dask's and asyncio's timers overflow
@@ -94,7 +94,7 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--npy", type=Path, help="also write XYZ as a float32 .npy array (height, width, 3)")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
     render.add_argument("--seed", type=int, help="random seed (default: the scene's)")
-    render.add_argument("--backend", choices=BACKENDS, help="kernel backend (default: the scene's)")
+    render.add_argument("--backend", choices=backends.NAMES, help="kernel backend (default: the scene's)")
     render.add_argument("--transparent", action="store_true",
                         help="Film ▸ Transparent: camera rays do not see the background; the EXR's and PNG's alpha "
                              "is 1 − the share they saw (default: the scene's render.transparent)")
@@ -148,12 +148,12 @@ def _render(args, written: list) -> int:
         scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, transparent=True))
     progress = None if args.quiet else ProgressBar()
     if args.scheduler is not None or args.workers is not None:
-        from . import distributed
+        from . import farm
 
         options = {"tile_size": args.tile_size, "timeout": args.timeout}
-        result = distributed.render(scene, scheduler=args.scheduler, workers=args.workers, spp=args.spp,
-                                    seed=args.seed, backend=args.backend, threads=args.threads, progress=progress,
-                                    **{name: value for name, value in options.items() if value is not None})
+        result = farm.render(scene, scheduler=args.scheduler, workers=args.workers, spp=args.spp, seed=args.seed,
+                             backend=args.backend, threads=args.threads, progress=progress,
+                             **{name: value for name, value in options.items() if value is not None})
     else:
         result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend, threads=args.threads,
                         progress=progress, notice=progress and progress.notice)

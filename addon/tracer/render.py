@@ -16,26 +16,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import adaptive, sampling
-from .passes import PassImages, first_hit_ready, render_passes
+from . import adaptive, backends, sampling
+from .backends import tile_arguments
+from .passes import PassImages, render_passes
 from .errors import SpectralError
 from .film import Film
 from .kernels.layout import KernelScene
 from .lowering import compile_scene
-from .scene import BACKENDS, Scene
+from .scene import Scene
 from .wavelength_modes import default_band, with_band
-
-
-def backend_module(name: str):
-    if name == "numba":
-        from .kernels import numba_backend
-
-        return numba_backend
-    if name == "numpy":
-        from .kernels import numpy_backend
-
-        return numpy_backend
-    raise SpectralError(f"unknown backend {name!r}: choose one of {', '.join(BACKENDS)}")
 
 
 def band_scenes(scene: Scene, kernel_scene: KernelScene | None = None) -> list[KernelScene]:
@@ -53,20 +42,9 @@ def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], 
                 seed: int, backend: str = "numba") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Σ XYZ, Σ XYZ² and Σ transparency over samples [begin, end) of each pixel in tile (x0, y0, width,
     height)."""
-    arguments = _tile_arguments(kernel_scene, band, samples, tile, seed)
-    backend_module(backend).render_tile(*arguments)
+    arguments = tile_arguments(kernel_scene, band, samples, tile, seed)
+    backends.named(backend).kernels.render_tile(*arguments)
     return arguments[-3:]
-
-
-def _tile_arguments(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
-                    seed: int) -> tuple:
-    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last three). Integers go as
-    int64 (the seed as uint64, its whole range) whatever their values, so that no value changes the
-    compiled kernel's argument types (a seed of 2⁶³ would be typed uint64, and compile a second kernel)."""
-    x0, y0, width, height = (np.int64(value) for value in tile)
-    return (kernel_scene, x0, y0, width, height, np.int64(samples[0]), np.int64(samples[1]), np.uint64(seed),
-            np.int64(band), np.zeros((int(height), int(width), 3)), np.zeros((int(height), int(width), 3)),
-            np.zeros((int(height), int(width))))
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
@@ -176,16 +154,16 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     backend = backend or settings.backend
     if spp < 1:
         raise SpectralError(f"samples per pixel must be at least 1, got {spp}")
-    module = backend_module(backend)
+    chosen = backends.named(backend)
     if threads:
-        module.set_threads(int(threads))
+        chosen.kernels.set_threads(int(threads))
     start = time.perf_counter()
     bands = band_scenes(scene)
     camera = scene.camera
     film = Film(camera.width, camera.height, len(bands))
     total = camera.width * camera.height * spp * len(bands)
     done = 0
-    cancelled = backend == "numba" and not kernel_ready(module, bands[0], seed, cancel, notice)
+    cancelled = not chosen.prepare(bands[0], seed, cancel, notice)
     tiler = Tiler(camera.width, camera.height, unit_seconds)
     adaptive_state = Adaptive(settings, spp, film)
     for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler, adaptive_state):
@@ -203,8 +181,8 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)
     data_passes = PassImages({}, {})
-    if settings.passes and backend == "numba" and not cancelled:
-        cancelled = not first_hit_ready(bands[0], cancel, notice)
+    if settings.passes and not cancelled:
+        cancelled = not chosen.prepare_first_hits(bands[0], cancel, notice)
     if settings.passes and not cancelled:
         with KERNEL_LAUNCH:
             data_passes = render_passes(scene, bands[0], spp, seed, backend)
@@ -240,24 +218,6 @@ def _units(spp: int, bands: int, tiler: Tiler, adaptive_state: Adaptive | None =
         for band in range(bands):
             for tile in tiler.tiles(size, active):
                 yield band, (begin, begin + size), tile
-
-
-def kernel_ready(module, kernel_scene: KernelScene, seed: int, cancel, notice) -> bool:
-    """Compile the Numba kernel for the scene's argument types (or load it from its cache), cancellably;
-    False if cancelled. A compile already running in the background (`background_compile`) is waited for,
-    then its cache loaded. Compiling without running leaves nothing to run in the background after a
-    cancel (Numba's workqueue threading layer aborts when two threads launch kernels at once)."""
-    import numba
-
-    from . import background_compile
-    from .kernels import numba_cache
-
-    if not background_compile.wait(cancel, notice):
-        return False
-
-    arguments = _tile_arguments(kernel_scene, 0, (0, 1), (0, 0, 1, 1), seed)
-    signature = tuple(numba.typeof(argument) for argument in arguments)
-    return numba_cache.ready(module.render_tile, lambda: module.render_tile.compile(signature), cancel, notice)
 
 
 def render_stats(film: Film, seconds: float, backend: str) -> dict:

@@ -24,7 +24,6 @@ LIGHT_UNITS = ("luminous", "radiant")
 RADIANT_UNITS = {"sun": "W·m⁻²", "environment": "W·m⁻²·sr⁻¹", "sky": "W·m⁻²·sr⁻¹", "point": "W·sr⁻¹",
                  "spot": "W·sr⁻¹", "area": "W", "envmap": "× its map"}
 WAVELENGTH_SAMPLINGS = ("uniform", "d65_rejection", "uv", "light", "visible", "colour")
-BACKENDS = ("numba", "numpy")
 SEED_MAX = 2**64 - 1  # seeds are unsigned 64-bit integers in the kernels' random streams
 SPP_MAX = 2**32  # a pixel's samples are points of a Sobol sequence of 2³² points (kernels/rng.py)
 # Scattering events of a path: Russian roulette ends paths long before; beyond, a value is a mistake.
@@ -242,7 +241,7 @@ class RenderSettings:
     lambda_max: float = 830.0
     bands: int = 1  # per-wavelength passes: the λ range split into this many equal bands
     cmf: str = "cie1931"  # "cie1931" | "wyman1" | "wyman3"
-    backend: str = "numba"  # "numba" | "numpy"
+    backend: str = "numba"  # one of backends.NAMES
     # Adaptive sampling (`adaptive`): a pixel stops once its error is below this (0: every pixel gets `spp`),
     # after `min_samples` (0: chosen from the threshold).
     noise_threshold: float = 0.0

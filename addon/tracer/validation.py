@@ -8,13 +8,13 @@ itself imports none of them.
 
 import numpy as np
 
-from . import checks, colorimetry
+from . import backends, checks, colorimetry
 from .colorimetry import CMF_NAMES as CMFS
 from .errors import SpectralError
 from .kernels.layout import AREA_SHAPES, CAMERA_KINDS, LIGHT_KINDS, PHASES, WAVELENGTHS_PER_PATH
 from .lights import peak_emission
 from .phase import HG_G_LIMIT
-from .scene import (BACKENDS, DEPTH_MAX, LIGHT_UNITS, RADIANT_UNITS, SEED_MAX, SENSOR_FITS, SPP_MAX,
+from .scene import (DEPTH_MAX, LIGHT_UNITS, RADIANT_UNITS, SEED_MAX, SENSOR_FITS, SPP_MAX,
                     WAVELENGTH_SAMPLINGS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
                     RenderSettings, Scene, Surface)
 from .spectra import Spectrum
@@ -343,7 +343,7 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
         except SpectralError as problem:
             raise SpectralError(f"{where}.bands: {problem}") from None
     checks.one_of(settings.cmf, f"{where}.cmf", CMFS)
-    checks.one_of(settings.backend, f"{where}.backend", BACKENDS)
+    checks.one_of(settings.backend, f"{where}.backend", backends.NAMES)
     checks.within(checks.number(settings.noise_threshold, f"{where}.noise_threshold"), f"{where}.noise_threshold",
                   0.0, 1.0)
     checks.whole_within(settings.min_samples, f"{where}.min_samples", 0)

@@ -1,13 +1,13 @@
 """Each enumeration the add-on offers in Blender lists exactly the choices of the tracer's one definition of
 it (docs/architecture.md, "Data flow": the scene format's enumerations live in `tracer/scene.py`,
-`tracer/kernels/layout.py`, `tracer/colorimetry.py` and `tracer/spectra.py`), with the tracer's default, so
+`tracer/kernels/layout.py`, `tracer/colorimetry.py`, `tracer/spectra.py` and `tracer/backends.py`), with the tracer's default, so
 a choice added to or removed from one side fails here instead of being refused at render time (or never
 offered). Read from Blender's registered RNA, as a user sees the menus."""
 
 import pytest
 
 from addon.export.scene import render_settings
-from addon.tracer import colorimetry, scene as tracer_scene, spectra
+from addon.tracer import backends, colorimetry, scene as tracer_scene, spectra
 from addon.tracer.kernels import layout
 from addon.tracer.scene import RenderSettings
 from addon.tracer.validation import check_settings
@@ -18,7 +18,7 @@ bpy = pytest.importorskip("bpy")
 ENUMERATIONS = [
     ("SpectralRenderSettings", "wavelength_sampling", tracer_scene.WAVELENGTH_SAMPLINGS, True),
     ("SpectralRenderSettings", "cmf", colorimetry.CMF_NAMES, True),
-    ("SpectralRenderSettings", "backend", tracer_scene.BACKENDS, True),
+    ("SpectralRenderSettings", "backend", backends.NAMES, True),
     ("SpectralRenderSettings", "wavelengths_per_path", tuple(map(str, layout.WAVELENGTHS_PER_PATH)), True),
     ("SpectralMaterialSettings", "phase", layout.PHASES, True),
     ("SpectralLightSettings", "unit", tracer_scene.LIGHT_UNITS, True),

@@ -116,11 +116,6 @@ def test_the_circle_finder_finds_a_loop_of_three():
     assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
 
 
-# The circles still to untie (issue 33; docs/architecture.md says what knot each hides). None may be added.
-KNOWN_CIRCLES = [
-    ["addon.tracer.background_compile", "addon.tracer.render"],
-]
-
-
 def test_no_import_circles():
-    assert circles(module_graph()) == KNOWN_CIRCLES
+    """Issue 33 untied the last ones (render ↔ background_compile: the backends' `prepare`, backends.py)."""
+    assert circles(module_graph()) == []

@@ -1,7 +1,7 @@
-"""Compiling the kernel in a separate process (addon/tracer/background_compile.py): the child imports the
-tracer under the parent's package name and fills the cache folder every import name reads; a render waits
-for it, passing on what it says it does, and that wait can be cancelled; where the shipped portable kernel
-serves, a render does not wait."""
+"""Compiling the kernel in a separate process (addon/tracer/background_compile.py, the child running
+addon/tracer/precompile.py): the child imports the tracer under the parent's package name and fills the cache
+folder every import name reads; a render waits for it, passing on what it says it does, and that wait can be
+cancelled; where the shipped portable kernel serves, a render does not wait."""
 
 import subprocess
 import sys
@@ -16,7 +16,8 @@ EXTENSION_PACKAGE = "bl_ext.user_default.spectral_volume.addon.tracer"  # as Ble
 
 
 def in_child(function: str, package: str, cwd=None) -> str:
-    """What `function` of background_compile prints, run in a child that imports the tracer as `package`."""
+    """What `function` of precompile.py prints, run in the background compile's child, which imports the tracer
+    as `package`."""
     command = background_compile.child_command(function)
     command[command.index(background_compile.PACKAGE)] = package
     return subprocess.run(command, env=background_compile.child_environment(), capture_output=True, text=True,

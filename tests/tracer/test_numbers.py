@@ -9,7 +9,7 @@ import numba
 import numpy as np
 import pytest
 
-from addon.tracer import image_io, lowering, render
+from addon.tracer import backends, image_io, lowering
 from addon.tracer.errors import SpectralError
 from addon.tracer.scene import DEPTH_MAX, SPP_MAX
 from addon.tracer.validation import MAX_LIGHT_PEAK
@@ -115,8 +115,8 @@ def test_more_bands_than_whole_nanometres_are_refused_when_read(write_scene, sce
 
 def _kernel_types(scene, seed: int) -> tuple:
     kernel_scene = lowering.compile_scene(scene)
-    return tuple(numba.typeof(argument) for argument in render._tile_arguments(kernel_scene, 0, (0, 1),
-                                                                                 (0, 0, 1, 1), seed))
+    return tuple(numba.typeof(argument) for argument in backends.tile_arguments(kernel_scene, 0, (0, 1),
+                                                                                   (0, 0, 1, 1), seed))
 
 
 def test_setting_values_never_change_the_kernels_argument_types(tiny_scene):

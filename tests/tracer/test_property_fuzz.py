@@ -161,10 +161,10 @@ OUTPUTS = st.sampled_from(["a.exr", "a.png", "a.npy", "s.json", "sub/../a.exr", 
        out=OUTPUTS)
 def test_command_line_option_combinations_render_finite_files_or_exit_1_with_a_message(
         write_scene, tmp_path_factory, monkeypatch, capsys, numbers, outputs, out):
-    from addon.tracer import distributed, render
+    from addon.tracer import farm, render
 
     monkeypatch.setattr(render, "render", _quick_render)
-    monkeypatch.setattr(distributed, "render", _quick_render)
+    monkeypatch.setattr(farm, "render", _quick_render)
     folder = tmp_path_factory.mktemp("cli")
     (folder / "dir.exr").mkdir()
     (folder / "sub").mkdir()
@@ -184,9 +184,12 @@ def test_command_line_option_combinations_render_finite_files_or_exit_1_with_a_m
         assert err.startswith("error: ") and files == []
         return
     assert code == cli.EXIT_OK, err
+    stats = [folder / name for option, name in outputs if option == "--stats"][-1:]  # the last one given counts
     for name in files:
         path = folder / name
-        if path.suffix == ".exr":
+        if stats and path.resolve() == stats[0].resolve():  # JSON, whatever its name says
+            assert json.loads(path.read_text())["pixel_samples_per_second"] >= 0
+        elif path.suffix == ".exr":
             assert all(np.isfinite(channel).all() for channel in image_io.read_exr(path).values())
         elif path.suffix == ".npy":
             assert np.isfinite(np.load(path)).all()
