@@ -118,6 +118,14 @@ def spectral_exr_path(scene, frame: int, animation: bool = False) -> str:
     return os.path.splitext(path)[0] + SPECTRAL_SUFFIX
 
 
+def write_spectral_exr(scene, film, tracer_scene, animation: bool = False) -> str:
+    """Render ▸ Passes ▸ Spectral EXR: the film's spectral image written next to the render output of the scene's
+    current frame (`spectral_exr_path`); returns its path."""
+    path = spectral_exr_path(scene, scene.frame_current, animation)
+    image_io.write_all([spectral_exr(path, film, tracer_scene)])
+    return path
+
+
 def spectral_exr(path, film, tracer_scene) -> image_io.Output:
     """The film's spectral image (`Film.spectrum`) as an EXR in the layout of Fichet et al. 2021, with its linear
     Rec.709 RGB and alpha beside it, in the radiance units of `tracer_scene`'s sources (`spectral_film`)."""

@@ -45,7 +45,6 @@ from .thumbnails import preview_scene
 from ..props.render import ENGINE_ID
 from ..tracer.denoise import available as denoise_available, denoised_rgb
 from ..tracer.errors import SpectralError
-from ..tracer import image_io
 from ..tracer.image_io import PASSES
 from ..tracer.passes import DEPTH, MIST, NORMAL, pass_channels
 from ..tracer.scene import RenderSettings
@@ -119,18 +118,13 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
                 self.update_result(result)
                 self._denoise(result, job.result.film, settings)
                 if job.result.film.bins and not self.is_preview:
-                    self._write_spectral_exr(original, job.result.film, scene)
+                    path = output.write_spectral_exr(original, job.result.film, scene, self.is_animation)
+                    self.report({"INFO"}, f"Spectral EXR written: {path}")
             except SpectralError as error:  # Open Image Denoise failed, or the spectral EXR could not be written
                 problem = str(error)
         if problem is not None:
             self._report_unless_preview({"ERROR"}, problem)
         self.end_result(result)
-
-    def _write_spectral_exr(self, scene, film, tracer_scene) -> None:
-        """Render ▸ Passes ▸ Spectral EXR: the film's spectral image next to the frame's render output."""
-        path = output.spectral_exr_path(scene, scene.frame_current, self.is_animation)
-        image_io.write_all([output.spectral_exr(path, film, tracer_scene)])
-        self.report({"INFO"}, f"Spectral EXR written: {path}")
 
     def _report_unless_preview(self, kind: set, message: str) -> None:
         """Report to the user, except from a preview (a thumbnail of Blender's preview scene: its area lights,

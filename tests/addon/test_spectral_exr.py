@@ -60,6 +60,16 @@ def test_f12_writes_the_spectral_exr_next_to_the_render_output(registered, tmp_p
     assert abs(difference.mean()) <= 5 * error + 0.02 * rendered.mean(), (difference.mean(), error, rendered.mean())
 
 
+def test_render_to_image_writes_it_next_to_the_render_output_too(registered, tmp_path):
+    scene, _ = surfaces_scene(8, 6)
+    scene.render.engine = "SPECTRAL_VOLUME"
+    scene.spectral.spectral_exr = True
+    scene.render.filepath = str(tmp_path / "still")
+    assert bpy.ops.spectral.render_image(image_name="Spectral") == {"FINISHED"}
+    names, channels, _ = spectral_channels(tmp_path / "still_spectral.exr")
+    assert len(names) == 40 and channels[names[0]].shape == (6, 8)
+
+
 def test_the_blend_command_line_writes_the_spectral_exr(registered, tmp_path):
     """Frame placeholders as in --out; Blender's own sun (its Watts) and World are radiant, so the units are
     absolute."""
