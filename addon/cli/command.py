@@ -226,7 +226,8 @@ def module_main(argv) -> int:
     """`python -m addon.cli render ...`: registers the add-on in this bpy module first."""
     if not argv or argv[0] != "render":
         print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N | --frames LIST] "
-              "[--resolution WxH] [--percentage N] [--png OUT.png] [--spp N]", file=sys.stderr)
+              "[--resolution WxH] [--percentage N] [--png OUT.png] [--spectral-exr OUT.exr] [--spp N]",
+              file=sys.stderr)
         return 2
     from .. import register
 
