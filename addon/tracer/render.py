@@ -197,7 +197,7 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
             break
         with KERNEL_LAUNCH:
             unit_start = time.perf_counter()
-            sums = render_unit(bands[band], band, samples, tile, seed, backend, spectrum=film.bins > 0)
+            sums = render_unit(bands[band], band, samples, tile, seed, backend, film.bins > 0)
             unit_seconds_taken = time.perf_counter() - unit_start
         size = samples[1] - samples[0]
         tiler.measured(tile, size, unit_seconds_taken)
