@@ -1,5 +1,6 @@
 """Where a render's film goes in Blender: the Render Result's passes (F12), a float Image datablock (linear
-Rec.709) and multilayer EXR files (Render to Image, the command line), all named and laid out alike.
+Rec.709) and multilayer EXR files (Render to Image, the command line), all named and laid out alike; and its spectral
+image, a file of its own next to the render output (`spectral_exr_path`), at the film's size.
 
 Pixels go to Blender bottom row first, one flat float32 array per image (`blender_rows`). A Render Result
 is the size of the film (with Render Region on, Blender crops or places it); an image and an EXR are each
@@ -7,13 +8,14 @@ the size Blender's own render would have: with Render Region on and Crop to Rend
 (the region) is placed in the full frame, empty (alpha 0) outside, as Blender places it (`placement`).
 """
 
+import os
 from typing import NamedTuple
 
 import bpy
 import numpy as np
 
 from .export.camera import Region, render_region
-from .tracer import denoise, image_io
+from .tracer import denoise, image_io, spectral_film
 from .tracer.image_io import COMBINED, VARIANCE, XYZ
 from .tracer.passes import DEPTH, NO_HIT_DEPTH, PassImages
 
@@ -101,6 +103,34 @@ def exr(path, images: Passes, layer: str, data: PassImages | None = None) -> ima
     """The multilayer EXR of `images` and the data passes `data`, its channels in the render layer `layer`, as
     F12 names them."""
     return image_io.exr(path, images.xyz, images.rgb, images.variance, images.alpha, layer, data)
+
+
+SPECTRAL_SUFFIX = "_spectral.exr"
+
+
+def spectral_exr_path(scene, frame: int, animation: bool = False) -> str:
+    """Where a frame's spectral EXR goes: the render output's path (Output Properties ▸ Output) as Blender saves the
+    image, its file extension replaced by `_spectral.exr`: for an animation, the path of `frame` (its number
+    added, or put in place of its `#`s); for a still, the path as it is (a folder: the frame's file in it)."""
+    path = bpy.path.abspath(scene.render.filepath)
+    if animation or not os.path.basename(path):
+        path = bpy.path.abspath(scene.render.frame_path(frame=frame))
+    return os.path.splitext(path)[0] + SPECTRAL_SUFFIX
+
+
+def write_spectral_exr(scene, film, tracer_scene, animation: bool = False) -> str:
+    """Render ▸ Passes ▸ Spectral EXR: the film's spectral image written next to the render output of the scene's
+    current frame (`spectral_exr_path`); returns its path."""
+    path = spectral_exr_path(scene, scene.frame_current, animation)
+    image_io.write_all([spectral_exr(path, film, tracer_scene)])
+    return path
+
+
+def spectral_exr(path, film, tracer_scene) -> image_io.Output:
+    """The film's spectral image (`Film.spectrum`) as an EXR in the layout of Fichet et al. 2021, with its linear
+    Rec.709 RGB and alpha beside it, in the radiance units of `tracer_scene`'s sources (`spectral_film`)."""
+    return image_io.spectral_exr(bpy.path.abspath(str(path)), film.spectrum, film.spectrum_edges,
+                                 spectral_film.radiance_units(tracer_scene), film.rgb(), film.alpha)
 
 
 def data_passes(data: PassImages, region: Region | None = None) -> PassImages:

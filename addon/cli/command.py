@@ -1,7 +1,8 @@
 """Headless rendering of a .blend file to multilayer EXRs (and PNGs), one frame or many, as `blender -b -f/-a`.
 
     python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N | --frames 1-250,300]
-        [--resolution WxH] [--percentage N] [--png OUT.png] [--spp N] [--scheduler ADDRESS] [--quiet]
+        [--resolution WxH] [--percentage N] [--png OUT.png] [--spectral-exr OUT.exr] [--spp N]
+        [--scheduler ADDRESS] [--quiet]
     blender -c spectral_render FILE.blend --out OUT.exr [...]   (the same, with the extension installed)
 
 Each frame is exported as F12 renders it and rendered by the render job its Render settings choose (the
@@ -38,6 +39,10 @@ def _parser(prog: str) -> argparse.ArgumentParser:
                         "XYZ Variance passes, named as F12's); '#'s are replaced by the frame number")
     parser.add_argument("--png", type=Path, help="also write a PNG (Standard view at the scene's exposure); "
                         "'#'s are replaced by the frame number")
+    parser.add_argument("--spectral-exr", type=Path, metavar="PATH",
+                        help="also write the spectral image (one channel per wavelength bin, the OpenEXR spectral "
+                             "layout of Fichet et al. 2021; bins: the scene's Spectral EXR settings); '#'s are "
+                             "replaced by the frame number")
     parser.add_argument("--scene", help="scene of the file to render (default: the file's active scene)")
     frames = parser.add_mutually_exclusive_group()
     frames.add_argument("--frame", type=int, help="frame to render (default: the file's current frame)")
@@ -114,10 +119,10 @@ def _check_options(args) -> list[int] | None:
     low, high = _limits("RenderSettings", "resolution_percentage")
     if args.percentage is not None and not low <= args.percentage <= high:
         raise SpectralError(f"--percentage: must be from {low} to {high}, as in Blender, found {args.percentage}")
-    outputs = {"--out": args.out, "--png": args.png}
+    outputs = {"--out": args.out, "--png": args.png, "--spectral-exr": args.spectral_exr}
     check_frame_paths(outputs, frames or [])
     first = 0 if frames is None else frames[0]
-    for (option, path), suffix in zip(outputs.items(), (".exr", ".png")):
+    for (option, path), suffix in zip(outputs.items(), (".exr", ".png", ".exr")):
         if path is not None:
             image_io.check_destination(frame_path(path, first), suffix)
     image_io.check_distinct((option, None if path is None else frame_path(path, first))
@@ -136,6 +141,8 @@ def render_blend(args, written: list):
         scene.render.resolution_x, scene.render.resolution_y = size
     if args.percentage is not None:
         scene.render.resolution_percentage = args.percentage
+    if args.spectral_exr is not None:
+        scene.spectral.spectral_exr = True
     for frame in frames or [scene.frame_current]:
         try:
             yield _render_frame(scene, frame, args, written)
@@ -167,6 +174,11 @@ def _render_frame(scene, frame: int, args, written: list) -> str:
     if args.png is not None:
         alpha = images.alpha if scene.render.film_transparent else None
         outputs.append(image_io.png(frame_path(args.png, frame), images.rgb, scene.view_settings.exposure, alpha))
+    if args.spectral_exr is not None:
+        if not result.film.bins:
+            raise SpectralError(f"--spectral-exr: the {job.describe()} does not make the spectral image yet: render "
+                                "with the tracer on this computer")
+        outputs.append(output.spectral_exr(frame_path(args.spectral_exr, frame), result.film, export.scene))
     paths = image_io.write_all(outputs)
     written += paths
     spp = scene.spectral.samples if args.spp is None else args.spp
@@ -214,7 +226,8 @@ def module_main(argv) -> int:
     """`python -m addon.cli render ...`: registers the add-on in this bpy module first."""
     if not argv or argv[0] != "render":
         print("usage: python -m addon.cli render FILE.blend --out OUT.exr [--scene NAME] [--frame N | --frames LIST] "
-              "[--resolution WxH] [--percentage N] [--png OUT.png] [--spp N]", file=sys.stderr)
+              "[--resolution WxH] [--percentage N] [--png OUT.png] [--spectral-exr OUT.exr] [--spp N]",
+              file=sys.stderr)
         return 2
     from .. import register
 

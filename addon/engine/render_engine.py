@@ -117,7 +117,10 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
                 output.stamp_metadata(self.get_result(), job.result.passes, depsgraph.view_layer.name)
                 self.update_result(result)
                 self._denoise(result, job.result.film, settings)
-            except SpectralError as error:  # Open Image Denoise failed
+                if job.result.film.bins and not self.is_preview:
+                    path = output.write_spectral_exr(original, job.result.film, scene, self.is_animation)
+                    self.report({"INFO"}, f"Spectral EXR written: {path}")
+            except SpectralError as error:  # Open Image Denoise failed, or the spectral EXR could not be written
                 problem = str(error)
         if problem is not None:
             self._report_unless_preview({"ERROR"}, problem)

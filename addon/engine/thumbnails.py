@@ -21,8 +21,8 @@ KEY_LIGHT_FROM = (-0.5, 0.7, 0.6)  # towards the key sun, in the camera's (right
 
 def preview_scene(scene: Scene, samples: int) -> Scene:
     """The exported preview scene as a preview renders it: with a key light if it has none of its own
-    but the World, at `samples` per pixel."""
-    settings = dataclasses.replace(scene.settings, spp=samples)
+    but the World, at `samples` per pixel, keeping no spectral image (a thumbnail writes no Spectral EXR)."""
+    settings = dataclasses.replace(scene.settings, spp=samples, spectrum=False)
     if any(light.kind in ("sun", "point", "spot", "area") for light in scene.lights):
         return dataclasses.replace(scene, settings=settings)
     axes = np.asarray(scene.camera.to_world)[:3, :3]

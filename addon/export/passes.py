@@ -1,5 +1,6 @@
 """A View Layer's render passes → the tracer's data passes (`tracer/passes.py`), and the passes it asks for that the
-engine does not make, named for the render report's warning.
+engine does not make, named for the render report's warning; the Render settings' Spectral EXR → the tracer's spectral
+image (`tracer/spectral_film.py`).
 
 The engine makes Combined, XYZ and XYZ Variance always, and the View Layer's Z (Depth), Mist, Normal and
 Cryptomatte Object and Material (at its Cryptomatte Levels), the Mist pass after the World's Mist Pass settings.
@@ -45,6 +46,13 @@ def pass_settings(view_layer, world) -> dict:
     return fields
 
 
+def spectrum_settings(scene) -> dict:
+    """The RenderSettings fields of the scene's Spectral EXR (`spectrum`, its bins)."""
+    s = scene.spectral
+    return {"spectrum": bool(s.spectral_exr), "spectrum_start": float(s.spectral_exr_start),
+            "spectrum_end": float(s.spectral_exr_end), "spectrum_step": float(s.spectral_exr_step)}
+
+
 def unmade_passes(view_layer) -> list[str]:
     """The passes the View Layer asks for that the engine does not make (its AOVs and Light Groups included)."""
     names = []
@@ -67,12 +75,16 @@ def unmade_warning(view_layer) -> str | None:
 
 
 def without_passes(export, renderer: str):
-    """`export` (an `Export`) for a renderer that makes no data passes (the Dask farm, the Cycles emulation): its
-    scene asks for none, and a warning names those left out."""
-    wanted = export.scene.settings.passes
-    if not wanted:
+    """`export` (an `Export`) for a renderer that makes no data passes and no spectral image (the Dask farm, the
+    Cycles emulation): its scene asks for none, and a warning names those left out."""
+    wanted, spectrum = export.scene.settings.passes, export.scene.settings.spectrum
+    if not wanted and not spectrum:
         return export
-    settings = dataclasses.replace(export.scene.settings, passes=())
-    warning = f"{renderer} does not render data passes yet: {', '.join(wanted)} left out of the render"
+    settings = dataclasses.replace(export.scene.settings, passes=(), spectrum=False)
+    warnings = []
+    if wanted:
+        warnings.append(f"{renderer} does not render data passes yet: {', '.join(wanted)} left out of the render")
+    if spectrum:
+        warnings.append(f"{renderer} does not make the spectral image yet: no Spectral EXR written")
     return dataclasses.replace(export, scene=dataclasses.replace(export.scene, settings=settings),
-                               warnings=[*export.warnings, warning])
+                               warnings=[*export.warnings, *warnings])

@@ -42,7 +42,7 @@ from .fluids import fluid_domain, fluid_grids
 from .lights import export_light
 from .media import export_medium, materials, shader_media, volume_material
 from .meshes import voxelise
-from .passes import pass_settings, unmade_warning
+from .passes import pass_settings, spectrum_settings, unmade_warning
 from ..nodes.notes import Notes
 from .volume_fields import VolumeFields
 from .volumes import volume_grids
@@ -158,8 +158,9 @@ def export_scene(depsgraph, view: Camera | None = None) -> Export:
         raise SpectralError("the scene has no lights: add a sun, point or spot light, give the World a colour, "
                             "or make a volume or a surface glow" + (f" ({warning})" if warning else ""))
     settings = render_settings(settings_scene)
-    if not originals:  # F12 and the command lines: the view layer's data passes (the viewport shows none)
-        settings = dataclasses.replace(settings, **pass_settings(depsgraph.view_layer, settings_scene.world))
+    if not originals:  # F12 and the command lines: the view layer's data passes and the spectrum (the viewport: none)
+        settings = dataclasses.replace(settings, **pass_settings(depsgraph.view_layer, settings_scene.world),
+                                       **spectrum_settings(settings_scene))
         unmade = unmade_warning(depsgraph.view_layer)
         if unmade is not None:
             warnings.append(unmade)
@@ -183,4 +184,6 @@ def validated(scene: Scene) -> Scene:
                 noun = "volume" if kind == "media" else "surface"
             return f"{noun} {owner.name!r}" + (f" {rest[1:]}" if rest else "")
         pattern = r"\b(lights|media|surfaces)\[(\d+)\](\.[\w.\[\]]+)?"
-        raise SpectralError(re.sub(pattern, name, str(problem))) from None
+        message = re.sub(r"\brender\.spectrum_(start|end|step)\b",
+                         lambda match: f"Spectral EXR {match.group(1).title()} (View Layer ▸ Passes)", str(problem))
+        raise SpectralError(re.sub(pattern, name, message)) from None

@@ -12,7 +12,7 @@ import bpy
 
 from ..jobs.kinds import render_job
 from ..jobs.protocol import Job
-from ..output import denoising, placement, write_outputs
+from ..output import denoising, placement, write_outputs, write_spectral_exr
 from ..export.rendered import export_rendered
 from ..tracer.errors import SpectralError
 
@@ -36,11 +36,13 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
     _warnings_shown = 0
     _message = None
     _region = None  # where the film goes in the image (output.placement), as exported
+    _tracer_scene = None  # the exported scene (the spectral EXR's units)
 
     def _start(self, context) -> Job | None:
         try:
             export = export_rendered(context.scene, context.view_layer)
             self._region = placement(context.scene)
+            self._tracer_scene = export.scene
             job = render_job(context.scene, export)
         except SpectralError as problem:
             self.report({"ERROR"}, f"Nothing rendered: {problem}")
@@ -76,6 +78,9 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
         try:
             image = write_outputs(job.result.film, self.image_name, self.exr_path, context.view_layer.name,
                                   self._region, denoised, job.result.passes)
+            if job.result.film.bins:
+                path = write_spectral_exr(context.scene, job.result.film, self._tracer_scene)
+                self.report({"INFO"}, f"Spectral EXR written: {path}")
         except SpectralError as problem:
             self.report({"ERROR"}, f"Render not saved: {problem}")
             return {"CANCELLED"}

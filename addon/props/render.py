@@ -66,6 +66,18 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
         ("cie1931", "CIE 1931", "The exact CIE 1931 2° observer tables"),
         ("wyman1", "Wyman (single lobe)", "Wyman–Sloan–Shirley single-lobe fit"),
         ("wyman3", "Wyman (multi-lobe)", "Wyman–Sloan–Shirley multi-lobe fit")])
+    spectral_exr: bpy.props.BoolProperty(
+        name="Spectral EXR", default=DEFAULTS.spectrum,
+        description="Also keep each pixel's spectrum and write it next to the render output (its path with "
+                    "_spectral.exr for the extension): one channel per wavelength bin, the OpenEXR spectral layout "
+                    "of Fichet et al. 2021. Not from a render farm or the Cycles emulation")
+    spectral_exr_start: bpy.props.FloatProperty(name="Start", description="Where the first bin starts (nm)",
+                                                default=DEFAULTS.spectrum_start, min=LAMBDA_MIN, max=LAMBDA_MAX)
+    spectral_exr_end: bpy.props.FloatProperty(name="End", description="Where the last bin ends (nm)",
+                                              default=DEFAULTS.spectrum_end, min=LAMBDA_MIN, max=LAMBDA_MAX)
+    spectral_exr_step: bpy.props.FloatProperty(name="Step", description="The width of every bin (nm); it must "
+                                               "divide End − Start", default=DEFAULTS.spectrum_step, min=0.1,
+                                               max=LAMBDA_MAX - LAMBDA_MIN)
     backend: bpy.props.EnumProperty(name="Backend", description="Which kernel traces the paths",
                                     default=DEFAULTS.backend, items=[
         ("numba", "Numba", "Compiled kernel (fast)"),

@@ -102,6 +102,12 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--passes", metavar="NAMES",
                         help="data passes to write in the EXR beside the image, comma-separated: Depth, Mist, Normal, "
                              "CryptoObject, CryptoMaterial (default: the scene's render.passes)")
+    render.add_argument("--spectral-exr", type=Path, metavar="PATH",
+                        help="also write the spectral image: an EXR with one channel per wavelength bin, in the layout "
+                             "of Fichet et al. 2021 (docs/scene-format.md; bins: the scene's render.spectrum_*)")
+    for edge, default in (("start", 380), ("end", 780), ("step", 10)):
+        render.add_argument(f"--spectrum-{edge}", type=float, metavar="NM",
+                            help=f"the spectral EXR's bins' {edge} in nm (default: the scene's, {default} unless set)")
     render.add_argument("--stats", type=Path, help="write timing, samples per second and mean XYZ as JSON")
     render.add_argument("--quiet", action="store_true", help="no progress bar")
     farm = render.add_mutually_exclusive_group()
@@ -129,8 +135,11 @@ def _check_options(args) -> None:
     if args.timeout is not None and not (math.isfinite(args.timeout) and 0 < args.timeout <= TIMEOUT_MAX):
         raise SpectralError(f"--timeout: must be a positive number of seconds, at most {TIMEOUT_MAX:g} (a day), "
                             f"found {args.timeout:g}")
+    if args.spectral_exr is not None and (args.scheduler is not None or args.workers is not None):
+        raise SpectralError("--spectral-exr: a render farm does not make the spectral image yet: render it on this "
+                            "computer (without --scheduler and --workers)")
     outputs = {"--out": (args.out, ".exr"), "--png": (args.png, ".png"), "--npy": (args.npy, ".npy"),
-               "--stats": (args.stats, None)}
+               "--spectral-exr": (args.spectral_exr, ".exr"), "--stats": (args.stats, None)}
     for path, suffix in outputs.values():
         if path is not None:
             image_io.check_destination(path, suffix)
@@ -143,7 +152,7 @@ def _render(args, written: list) -> int:
     from .scene_io import load_scene
 
     _check_options(args)
-    scene = with_passes(load_scene(args.scene), args.passes)
+    scene = with_spectrum(with_passes(load_scene(args.scene), args.passes), args)
     if args.transparent:
         scene = dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, transparent=True))
     progress = None if args.quiet else ProgressBar()
@@ -164,6 +173,11 @@ def _render(args, written: list) -> int:
         outputs.append(image_io.png(args.png, film.rgb(), alpha=alpha))
     if args.npy:
         outputs.append(image_io.npy(args.npy, film.xyz))
+    if args.spectral_exr:
+        from .spectral_film import radiance_units
+
+        outputs.append(image_io.spectral_exr(args.spectral_exr, film.spectrum, film.spectrum_edges,
+                                             radiance_units(scene), film.rgb(), alpha))
     if args.stats:
         outputs.append(image_io.text(args.stats, json.dumps(result.stats, indent=2)))
     written += image_io.write_all(outputs)
@@ -185,6 +199,21 @@ def with_passes(scene, names: str | None):
     return dataclasses.replace(scene, settings=settings)
 
 
+def with_spectrum(scene, args):
+    """`scene` keeping the spectral image, its bins as the --spectrum-* options say, when --spectral-exr asks for
+    it; else as it is."""
+    if args.spectral_exr is None:
+        return scene
+    bins = {f"spectrum_{edge}": getattr(args, f"spectrum_{edge}") for edge in ("start", "end", "step")}
+    settings = dataclasses.replace(scene.settings, spectrum=True,
+                                   **{key: value for key, value in bins.items() if value is not None})
+    try:
+        check_settings(settings, "render")
+    except SpectralError as problem:
+        raise SpectralError(f"--spectral-exr: {problem}") from None
+    return dataclasses.replace(scene, settings=settings)
+
+
 def _validate(args) -> int:
     from .scene_io import validate_scene
 
@@ -199,6 +228,10 @@ def main(argv=None) -> int:
     if args.command == "render" and args.scheduler is None and args.workers is None:
         if args.tile_size is not None or args.timeout is not None:
             parser.error("--tile-size and --timeout apply to distributed renders: add --scheduler or --workers")
+    if args.command == "render" and args.spectral_exr is None:
+        if any(getattr(args, f"spectrum_{edge}") is not None for edge in ("start", "end", "step")):
+            parser.error("--spectrum-start, --spectrum-end and --spectrum-step set the bins of the spectral EXR: add "
+                         "--spectral-exr PATH")
     written = []
     return run_reporting(lambda: _render(args, written) if args.command == "render" else _validate(args), written)
 

@@ -1,11 +1,12 @@
-"""The film: per-pixel XYZ sums and squared sums and transparency sums for each wavelength band, and what
-they estimate.
+"""The film: per-pixel XYZ sums and squared sums and transparency sums for each wavelength band (and, for a spectral
+image, sums of each wavelength bin's estimate), and what they estimate.
 
 Each band is an independent estimator of its part of the spectrum; the pixel's XYZ is the sum over
 bands of each band's sample mean, and its variance (of that estimate) the sum of the bands' variances
 of the mean. Its alpha is 1 − the sum over bands of each band's mean transparency (`kernels/transparency.py`:
 the share of the background its camera paths saw, 0 without Film ▸ Transparent, so alpha 1); the colour is
-premultiplied by it, as Cycles' is.
+premultiplied by it, as Cycles' is. Its spectrum (with bins, `spectral_film`) is the sum over bands of each band's
+mean per bin, as its XYZ is.
 Accumulators merge by addition, so work split over passes, tiles or machines combines
 exactly (up to floating-point summation order). Samples are counted per pixel, so a film that holds
 part of a pass (some tiles done, others not) is still a consistent image.
@@ -19,43 +20,54 @@ from .errors import SpectralError
 from .grids import available_memory
 
 # float64 Σ XYZ, Σ XYZ² and Σ transparency and an int64 sample count per band, plus a tile's accumulators and
-# the XYZ, RGB, variance and alpha images made at the end.
+# the XYZ, RGB, variance and alpha images made at the end; for a spectral image, a float64 Σ per bin and band (and
+# the tile's), and the spectrum made at the end.
 ACCUMULATOR_BYTES = 2 * 3 * 8 + 8 + 8
 OUTPUT_BYTES = 3 * 3 * 8 + 8
+BIN_BYTES = 8
 
 
-def film_bytes(width: int, height: int, bands: int = 1) -> int:
+def film_bytes(width: int, height: int, bands: int = 1, bins: int = 0) -> int:
     """Memory a render of this size needs for its film (not counting the scene's grids)."""
-    return int(width) * int(height) * (ACCUMULATOR_BYTES * (bands + 1) + OUTPUT_BYTES)
+    return int(width) * int(height) * ((ACCUMULATOR_BYTES + BIN_BYTES * bins) * (bands + 1) + OUTPUT_BYTES
+                                       + BIN_BYTES * bins)
 
 
-def check_film_memory(width: int, height: int, bands: int = 1) -> None:
+def check_film_memory(width: int, height: int, bands: int = 1, bins: int = 0) -> None:
     """Refuse a film larger than the memory available, saying how much it would need."""
-    needed = film_bytes(width, height, bands)
+    needed = film_bytes(width, height, bands, bins)
     available = available_memory()
     if available is not None and needed > available:
+        spectral = f", {bins} spectral bins" if bins else ""
         raise SpectralError(f"a {shown(width, 24)}×{shown(height, 24)} film needs {byte_size(needed, 'GiB')} of "
-                            f"memory ({bands} band(s)), but only {byte_size(available, 'GiB')} is available")
+                            f"memory ({bands} band(s){spectral}), but only {byte_size(available, 'GiB')} is available")
 
 
 class Film:
-    def __init__(self, width: int, height: int, bands: int = 1):
-        check_film_memory(width, height, bands)
+    """`spectrum_edges`: the edges of the spectral image's bins in nm (`spectral_film.bin_edges`; empty: none)."""
+
+    def __init__(self, width: int, height: int, bands: int = 1, spectrum_edges=()):
+        self.spectrum_edges = np.asarray(spectrum_edges, dtype=np.float64)
+        self.bins = max(self.spectrum_edges.size - 1, 0)
+        check_film_memory(width, height, bands, self.bins)
         self.width, self.height, self.bands = int(width), int(height), int(bands)
         self.sum_xyz = np.zeros((self.bands, self.height, self.width, 3))
         self.sum_sq = np.zeros_like(self.sum_xyz)
         self.sum_transparent = np.zeros((self.bands, self.height, self.width))
+        self.sum_spectrum = np.zeros((self.bands, self.height, self.width, self.bins))
         self.pixel_samples = np.zeros((self.bands, self.height, self.width), dtype=np.int64)
 
     def add(self, band: int, y0: int, x0: int, sum_xyz: np.ndarray, sum_sq: np.ndarray, samples: int,
-            sum_transparent: np.ndarray | None = None) -> None:
+            sum_transparent: np.ndarray | None = None, sum_spectrum: np.ndarray | None = None) -> None:
         """Add a tile's accumulators (rows y0…, columns x0…) over `samples` samples per pixel of `band`
-        (`sum_transparent` None: samples that saw no background)."""
+        (`sum_transparent` None: samples that saw no background; `sum_spectrum` None: no spectrum)."""
         h, w = sum_xyz.shape[:2]
         self.sum_xyz[band, y0:y0 + h, x0:x0 + w] += sum_xyz
         self.sum_sq[band, y0:y0 + h, x0:x0 + w] += sum_sq
         if sum_transparent is not None:
             self.sum_transparent[band, y0:y0 + h, x0:x0 + w] += sum_transparent
+        if sum_spectrum is not None and self.bins:
+            self.sum_spectrum[band, y0:y0 + h, x0:x0 + w] += sum_spectrum
         self.pixel_samples[band, y0:y0 + h, x0:x0 + w] += samples
 
     @property
@@ -68,6 +80,12 @@ class Film:
         """Estimated XYZ per pixel, shape (height, width, 3)."""
         counts = np.maximum(self.pixel_samples, 1)[..., None]
         return (self.sum_xyz / counts).sum(axis=0)
+
+    @property
+    def spectrum(self) -> np.ndarray:
+        """Estimated mean spectral radiance over each bin per pixel, shape (height, width, bins): the sum over bands
+        of each band's mean (0 where no sample has arrived)."""
+        return (self.sum_spectrum / np.maximum(self.pixel_samples, 1)[..., None]).sum(axis=0)
 
     @property
     def alpha(self) -> np.ndarray:

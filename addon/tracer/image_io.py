@@ -5,7 +5,8 @@ The multilayer EXR's channels are named as Blender names a render's passes (`LAY
 `PASSES` is the one list of them: the render engine registers these passes, so F12's EXR, Render to
 Image's and the command lines' are named alike and Blender opens every one as the same render layer. The data
 passes a scene asks for (`passes`: `ViewLayer.Depth.Z`, `ViewLayer.Mist.Z`, `ViewLayer.Normal.X/Y/Z`,
-`ViewLayer.CryptoObject00.R/G/B/A`, …) follow them, with Cryptomatte's metadata in the header.
+`ViewLayer.CryptoObject00.R/G/B/A`, …) follow them, with Cryptomatte's metadata in the header. The spectral EXR
+(`spectral_exr`) is a file of its own, in the layout of Fichet et al. 2021.
 
 All files of one command are written together (`write_all`): each to a temporary name beside its
 destination, and only when every one was written are they renamed into place. A failed or cancelled
@@ -25,6 +26,7 @@ import numpy as np
 
 from .checks import byte_size
 from .errors import SpectralError
+from .spectral_film import channel_wavelength
 
 
 VIEW_LAYER = "ViewLayer"  # Blender's default view layer name: the layer of an EXR written outside Blender
@@ -250,6 +252,46 @@ def finite(pixels: np.ndarray, path) -> np.ndarray:
                             f"(3.4e38), the first at row {row}, column {column}; lower the brightest lights or "
                             "emission")
     return pixels
+
+
+SPECTRAL_LAYOUT_VERSION = "1.0"  # the version of Fichet et al. 2021's layout the spectral EXR follows
+
+
+def spectral_channel_names(edges) -> list[str]:
+    """The spectral EXR's channel of each bin (`edges`: B + 1 values in nm): `S0.<centre>nm`, the first Stokes
+    component (unpolarised emission) at the bin's centre (`spectral_film.channel_wavelength`: `S0.385nm`,
+    `S0.382,5nm`)."""
+    edges = np.asarray(edges, dtype=np.float64)
+    return [f"S0.{channel_wavelength(centre)}nm" for centre in (edges[:-1] + edges[1:]) / 2]
+
+
+def spectral_exr(path, spectrum: np.ndarray, edges, units: str, rgb: np.ndarray | None = None,
+                 alpha: np.ndarray | None = None) -> Output:
+    """The spectral image `spectrum` (height, width, bins: the mean spectral radiance over each bin of `edges`,
+    `Film.spectrum`) as an EXR in the layout of Fichet et al. 2021: a channel per bin (`spectral_channel_names`),
+    the header's `spectralLayoutVersion` and `emissiveUnits` (`units`: `spectral_film.radiance_units`), and, when
+    given, linear Rec.709 `rgb` as R, G, B (and `alpha` as A) for viewers that show no spectra."""
+    layers, names = [], []
+    if rgb is not None:
+        layers.append(rgb)
+        names += ["R", "G", "B"]
+        if alpha is not None:
+            layers.append(alpha[..., None])
+            names.append("A")
+    names += spectral_channel_names(edges)
+    if spectrum.shape[2] != len(edges) - 1:
+        raise SpectralError(f"the spectral image has {spectrum.shape[2]} bins, but {len(edges)} edges make "
+                            f"{len(edges) - 1}")
+    pixels = finite(np.concatenate(layers + [spectrum], axis=2), path)
+    attributes = {"spectralLayoutVersion": SPECTRAL_LAYOUT_VERSION, "emissiveUnits": units}
+    return Output(check_destination(path, ".exr"),
+                  lambda name: _write_oiio(name, pixels, names, "float", attributes=attributes))
+
+
+def write_spectral_exr(path, spectrum: np.ndarray, edges, units: str, rgb: np.ndarray | None = None,
+                       alpha: np.ndarray | None = None) -> Path:
+    """Write `spectral_exr(...)` on its own."""
+    return write_all([spectral_exr(path, spectrum, edges, units, rgb, alpha)])[0]
 
 
 def write_exr(path, xyz: np.ndarray, rgb: np.ndarray, variance: np.ndarray | None = None,

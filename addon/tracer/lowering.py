@@ -36,6 +36,7 @@ from .kernels.media import attenuation
 from .lights import kernel_spectrum, selection_powers, surface_power, texel_weights
 from .majorant import block_size_for, glow_floor, majorant_grid, minorant_grid
 from .scene import Grid, Light, Medium, Scene, Surface
+from .spectral_film import bin_edges
 from .wavelength_modes import default_band, with_band
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 from .validation import validate
@@ -379,6 +380,7 @@ def compile_scene(scene: Scene) -> KernelScene:
             pdf=np.zeros(GRID.size - 1),
             per_path=int(settings.wavelengths_per_path),
             xyz_weights=colorimetry.xyz_weights(settings.cmf),
+            spectrum_edges=bin_edges(settings),
         ),
         # int64 whatever the value (check_settings bounds it), so that no value changes the kernel's argument types
         termination=KernelTermination(max_depth=np.int64(settings.max_depth), rr_depth=np.int64(settings.rr_depth)),

@@ -39,12 +39,13 @@ def band_scenes(scene: Scene, kernel_scene: KernelScene | None = None) -> list[K
 
 
 def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
-                seed: int, backend: str = "numba") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                seed: int, backend: str = "numba", spectrum: bool = False) -> tuple[np.ndarray, ...]:
     """Σ XYZ, Σ XYZ² and Σ transparency over samples [begin, end) of each pixel in tile (x0, y0, width,
-    height)."""
-    arguments = tile_arguments(kernel_scene, band, samples, tile, seed)
+    height), and with `spectrum` the Σ of each spectral bin's estimate (height, width, bins) after them (the
+    scene's bins, `kernel_scene.wavelengths.spectrum_edges`; without, the kernel adds none)."""
+    arguments = tile_arguments(kernel_scene, band, samples, tile, seed, spectrum)
     backends.named(backend).kernels.render_tile(*arguments)
-    return arguments[-3:]
+    return arguments[-4:] if spectrum else arguments[-4:-1]
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
@@ -160,7 +161,7 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     start = time.perf_counter()
     bands = band_scenes(scene)
     camera = scene.camera
-    film = Film(camera.width, camera.height, len(bands))
+    film = Film(camera.width, camera.height, len(bands), bands[0].wavelengths.spectrum_edges)
     total = camera.width * camera.height * spp * len(bands)
     done = 0
     cancelled = not chosen.prepare(bands[0], seed, cancel, notice)
@@ -172,11 +173,11 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
             break
         with KERNEL_LAUNCH:
             unit_start = time.perf_counter()
-            sum_xyz, sum_sq, sum_transparent = render_unit(bands[band], band, samples, tile, seed, backend)
+            sums = render_unit(bands[band], band, samples, tile, seed, backend, film.bins > 0)
             unit_seconds_taken = time.perf_counter() - unit_start
         size = samples[1] - samples[0]
         tiler.measured(tile, size, unit_seconds_taken)
-        film.add(band, tile[1], tile[0], sum_xyz, sum_sq, size, sum_transparent)
+        film.add(band, tile[1], tile[0], sums[0], sums[1], size, *sums[2:])
         done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)

@@ -256,6 +256,12 @@ class RenderSettings:
     mist_depth: float = 25.0
     mist_falloff: str = "quadratic"  # "quadratic" | "linear" | "inverse_quadratic"
     cryptomatte_depth: int = 6
+    # The spectral image (`spectral_film`, the spectral EXR): per pixel, the mean spectral radiance over each bin from
+    # spectrum_start to spectrum_end nm in steps of spectrum_step nm.
+    spectrum: bool = False
+    spectrum_start: float = 380.0
+    spectrum_end: float = 780.0
+    spectrum_step: float = 10.0
 
 
 @dataclass(frozen=True, eq=False)

@@ -351,6 +351,9 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
     from .passes import check_passes  # the passes' rules, where they are made
 
     check_passes(settings, where)
+    from .spectral_film import check_bins  # the spectral image's rules, where its bins are made
+
+    check_bins(settings, where)
 
 
 def _check_boolean(value, where: str) -> None:

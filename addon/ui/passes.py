@@ -29,6 +29,18 @@ class SPECTRAL_PT_view_layer_passes(SpectralPanel, bpy.types.Panel):
         for name in (CRYPTO_OBJECT, CRYPTO_MATERIAL):
             column.prop(view_layer, TOGGLES[name], text=LABELS[name])
         layout.prop(view_layer, "pass_cryptomatte_depth", text="Levels")
+        draw_spectral_exr(layout, context.scene.spectral)
+
+
+def draw_spectral_exr(layout, settings) -> None:
+    """The Spectral EXR: on or off, and its bins. A file next to the render output, not a Render Result pass: a pass
+    holds at most 8 channels, each named by one letter, where the spectral layout names a channel by its wavelength."""
+    layout.prop(settings, "spectral_exr")
+    column = layout.column(align=True)
+    column.active = settings.spectral_exr
+    column.prop(settings, "spectral_exr_start")
+    column.prop(settings, "spectral_exr_end")
+    column.prop(settings, "spectral_exr_step")
 
 
 class SPECTRAL_PT_world_mist(SpectralPanel, bpy.types.Panel):

@@ -150,7 +150,8 @@ def test_the_passes_panel_offers_only_the_passes_the_engine_makes(registered):
     context = SimpleNamespace(scene=scene, engine=scene.render.engine, view_layer=layer, world=scene.world)
     layout = draw(bpy.types.SPECTRAL_PT_view_layer_passes, context)
     drawn = {args[1] for kind, args, _ in layout.calls if kind == "prop"}
-    assert drawn == {"use_pass_combined", "pass_cryptomatte_depth", *TOGGLES.values()}
+    assert drawn == {"use_pass_combined", "pass_cryptomatte_depth", *TOGGLES.values(),
+                     "spectral_exr", "spectral_exr_start", "spectral_exr_end", "spectral_exr_step"}
     mist = {args[1] for kind, args, _ in draw(bpy.types.SPECTRAL_PT_world_mist, context).calls if kind == "prop"}
     assert mist == {"start", "depth", "falloff"}
     # Blender's generic pass panels (which offer Emission, AO, AOVs, …) do not show under this engine

@@ -39,6 +39,32 @@ def test_render_writes_every_requested_output(write_scene, tmp_path):
     assert "%" in done.stderr  # the progress bar
 
 
+def test_spectral_exr_writes_the_bins_the_options_choose(write_scene, tmp_path):
+    """--spectral-exr writes the spectral image beside the EXR, its bins from --spectrum-start/-end/-step, its
+    units as the scene's lights give them; the bin options without it are a usage error."""
+    from addon.tracer import spectral_film
+    from addon.tracer.scene_io import load_scene
+
+    scene = write_scene()
+    spectral = tmp_path / "spectral.exr"
+    done = run_cli("render", scene, "--spp", 2, "--backend", "numpy", "--out", tmp_path / "image.exr",
+                   "--spectral-exr", spectral, "--spectrum-start", 400, "--spectrum-end", 700, "--spectrum-step", 20)
+    assert done.returncode == 0, done.stderr
+    import OpenImageIO
+
+    image = OpenImageIO.ImageInput.open(str(spectral))
+    spec = image.spec()
+    image.close()
+    assert [name for name in spec.channelnames if name.startswith("S0.")] == [f"S0.{nm}nm" for nm in range(410, 700, 20)]
+    assert spec.getattribute("emissiveUnits") == spectral_film.radiance_units(load_scene(scene))
+    channels = image_io.read_exr(spectral)
+    np.testing.assert_allclose(channels["R"], image_io.read_exr(tmp_path / "image.exr")["ViewLayer.Combined.R"])
+    done = run_cli("render", scene, "--out", tmp_path / "other.exr", "--spectrum-step", 5)
+    assert done.returncode == 2 and "add --spectral-exr PATH" in done.stderr
+    done = run_cli("render", scene, "--out", tmp_path / "other.exr", "--spectral-exr", spectral, "--spectrum-step", 7)
+    assert done.returncode == 1 and "--spectral-exr: render.spectrum_step: 380–780 nm is not a whole number" in done.stderr
+
+
 def test_validate_summarises_a_good_scene(write_scene):
     done = run_cli("validate", write_scene())
     assert done.returncode == 0, done.stderr
@@ -120,6 +146,9 @@ BAD_OPTIONS = {
     "in /proc": (["--out", "/proc/o.exr"], "cannot write /proc/o.exr: "),
     "png in /proc": (["--png", "/proc/o.png"], "cannot write /proc/o.png: "),
     "stats in /proc": (["--stats", "/proc/stats.json"], "cannot write /proc/stats.json: "),
+    "spectral exr on a farm": (["--workers", 1, "--spectral-exr", "{tmp}/s.exr"],
+                               "--spectral-exr: a render farm does not make the spectral image yet"),
+    "spectral exr as a png": (["--spectral-exr", "{tmp}/s.png"], "s.png: the file is written as EXR"),
 }
 
 

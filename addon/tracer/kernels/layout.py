@@ -185,12 +185,13 @@ class KernelSurfaces(NamedTuple):
 
 class KernelWavelengths(NamedTuple):
     """The camera's wavelengths and colour: the hero wavelength's distribution in this band, the
-    wavelengths per path and the XYZ weights."""
+    wavelengths per path, the XYZ weights and the spectral film's bins."""
 
     cdf: np.ndarray  # (GRID,) binned cdf of the hero wavelength in this band
     pdf: np.ndarray  # (GRID - 1,)
     per_path: int
     xyz_weights: np.ndarray  # (3, GRID)
+    spectrum_edges: np.ndarray  # (B + 1,) edges of the spectral film's uniform bins, nm (`spectrum_bins`); (0,): none
 
 
 class KernelTermination(NamedTuple):

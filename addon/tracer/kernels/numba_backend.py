@@ -99,6 +99,7 @@ from .media import (
 )
 from .numba_cache import cached
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
+from .spectrum_bins import spectrum_bin, spectrum_weight
 from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
 from .transparency import transparency_weight
 
@@ -696,6 +697,20 @@ def _path_xyz(ks, n, path):
     return x, y, z
 
 
+@jit(inline="always")
+def _path_spectrum(ks, n, path, sum_spectrum, row, column):
+    """The path's spectral estimate added to its pixel's bins (`spectrum_bins`); nothing without bins."""
+    if sum_spectrum.shape[2] == 0:
+        return
+    edges = ks.wavelengths.spectrum_edges
+    for i in range(n):
+        if path.radiance[i] == 0.0 or path.pdf_cam[i] <= 0.0:
+            continue
+        b = int(spectrum_bin(edges, path.lam_cam[i]))
+        if b >= 0:
+            sum_spectrum[row, column, b] += spectrum_weight(edges, path.radiance[i], path.pdf_cam[i], n)
+
+
 # ----------------------------------------------------------------------------- transport
 
 @jit(inline="always")
@@ -1127,10 +1142,10 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl, hit)
 
 @jit
 def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
-                   sum_transparent):
+                   sum_transparent, sum_spectrum):
     """Samples [sample_begin, sample_end) of the tile's pixels [first, last) (row-major), added to `sum_xyz`,
-    `sum_sq` and `sum_transparent`. The path's buffers are made once for them all: each allocation updates
-    Numba's global allocation counters atomically, which threads contend for."""
+    `sum_sq`, `sum_transparent` and `sum_spectrum`. The path's buffers are made once for them all: each allocation
+    updates Numba's global allocation counters atomically, which threads contend for."""
     media = max(ks.media.density_scale.shape[0], 1)
     path, vertex = _new_path(media), _new_coefficients(media)
     light, tracker, fl, hit = _new_light_sample(), _new_tracker(media), _new_fluorescent(), _new_hit()
@@ -1138,7 +1153,8 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
         row, column = index // tile_width, index % tile_width
         px, py = x0 + column, y0 + row
         sx, sy, sz, qx, qy, qz, st = _render_samples(ks, px, py, py * ks.camera.width + px, sample_begin, sample_end,
-                                                     seed, band, path, vertex, light, tracker, fl, hit)
+                                                     seed, band, path, vertex, light, tracker, fl, hit,
+                                                     sum_spectrum, row, column)
         sum_xyz[row, column, 0] += sx
         sum_xyz[row, column, 1] += sy
         sum_xyz[row, column, 2] += sz
@@ -1149,10 +1165,12 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
 
 
 @jit
-def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, light, tracker, fl, hit):
+def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, light, tracker, fl, hit,
+                    sum_spectrum, row, column):
     """Samples [sample_begin, sample_end) of one pixel, (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z², Σ transparency), in the
-    path's buffers (`_render_pixels` makes them). The scene and the buffers, which the caller keeps
-    alive, are borrowed (`_borrowed`): the loop below then updates no reference counts."""
+    path's buffers (`_render_pixels` makes them); each sample's spectrum is added to `sum_spectrum[row, column]`.
+    The scene and the buffers, which the caller keeps alive, are borrowed (`_borrowed`): the loop below then updates
+    no reference counts."""
     ks, path, vertex, light, tracker, fl, hit = (_borrowed(ks), _borrowed(path), _borrowed(vertex), _borrowed(light),
                                                  _borrowed(tracker), _borrowed(fl), _borrowed(hit))
     n = ks.wavelengths.per_path
@@ -1166,6 +1184,7 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
         ox, oy, oz, dx, dy, dz = camera_ray(ks, px, py, _next(path.stream), _next(path.stream))
         _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl, hit)
         x, y, z = _path_xyz(ks, n, path)
+        _path_spectrum(ks, n, path, sum_spectrum, row, column)
         sx, sy, sz = sx + x, sy + y, sz + z
         qx, qy, qz = qx + x * x, qy + y * y, qz + z * z
         st += path.transparent[0]
@@ -1180,19 +1199,21 @@ PIXEL_CHUNKS = 64
 @cached
 @jit(nogil=True)
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
-                sum_transparent):
+                sum_transparent, sum_spectrum):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
-    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel) and
-    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`)."""
+    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel),
+    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`) and
+    `sum_spectrum` (shape (tile_height, tile_width, B): Σ of each bin's estimate, `kernels/spectrum_bins.py`;
+    B = 0: none)."""
     _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.glow, ks.media, ks.fluorescence, ks.lights,
                  ks.envmaps, ks.surfaces, ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin,
-                 sample_end, seed, band, sum_xyz, sum_sq, sum_transparent)
+                 sample_end, seed, band, sum_xyz, sum_sq, sum_transparent, sum_spectrum)
 
 
 @jit(parallel=True, nogil=True)
 def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
                  wavelengths, termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
-                 sum_xyz, sum_sq, sum_transparent):
+                 sum_xyz, sum_sq, sum_transparent, sum_spectrum):
     """`render_tile`'s runs of pixels, in parallel. The kernel scene comes as its groups, and each run puts
     them together again: Numba's parallel loop hands a tuple to its threads member by member, which fails
     when a member is a tuple itself."""
@@ -1202,7 +1223,7 @@ def _render_runs(camera, density, majorant, temperature, glow, media, fluorescen
         ks = KernelScene(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
                          wavelengths, termination)
         _render_pixels(ks, x0, y0, tile_width, chunk * pixels // chunks, (chunk + 1) * pixels // chunks, sample_begin,
-                       sample_end, seed, band, sum_xyz, sum_sq, sum_transparent)
+                       sample_end, seed, band, sum_xyz, sum_sq, sum_transparent, sum_spectrum)
 
 
 def set_threads(count: int) -> None:

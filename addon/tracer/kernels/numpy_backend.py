@@ -45,6 +45,7 @@ from .light_sampling import (
     infinite_radiance, is_delta, sample_light)
 from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
+from .spectrum_bins import spectrum_bin, spectrum_weight
 from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
 from .transparency import transparency_weight
 
@@ -855,9 +856,9 @@ def _fluorescent_paths(ks, stream, ids, reservoir, fl):
 
 
 def _trace(ks, px, py, pixel_keys, samples):
-    """XYZ estimates (paths, 3) and transparencies (paths,) of one camera path per sample, through pixels
-    (px, py) keyed `pixel_keys`: the camera paths, then rounds of fluorescent sub-paths (the Numba kernel's
-    `_trace`)."""
+    """XYZ estimates (paths, 3), transparencies (paths,) and spectral estimates (`_path_spectrum`) of one camera
+    path per sample, through pixels (px, py) keyed `pixel_keys`: the camera paths, then rounds of fluorescent
+    sub-paths (the Numba kernel's `_trace`)."""
     paths, lam_cam, pdf_cam = _camera_paths(ks, px, py, pixel_keys, samples)
     count, n = lam_cam.shape
     stream = paths.stream
@@ -891,14 +892,26 @@ def _trace(ks, px, py, pixel_keys, samples):
         at = on_grid(lam_cam[:, i])
         for c in range(3):
             xyz[:, c] += np.where(counted, scale_i * table_at(ks.wavelengths.xyz_weights, c, at), 0.0)
-    return xyz, transparent
+    return xyz, transparent, _path_spectrum(ks, lam_cam, pdf_cam, radiance)
+
+
+def _path_spectrum(ks, lam_cam, pdf_cam, radiance):
+    """Each camera wavelength's bin (paths, n; -1 outside the bins) and its addition there (`spectrum_bins`), or
+    None without bins."""
+    edges = ks.wavelengths.spectrum_edges
+    if edges.shape[0] == 0:
+        return None
+    bins = spectrum_bin(edges, lam_cam).astype(np.int64)
+    return bins, spectrum_weight(edges, radiance, pdf_cam, lam_cam.shape[1])
 
 
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
-                sum_transparent):
+                sum_transparent, sum_spectrum):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
-    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel) and
-    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`)."""
+    `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel),
+    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`) and
+    `sum_spectrum` (shape (tile_height, tile_width, B): Σ of each bin's estimate, `kernels/spectrum_bins.py`;
+    B = 0: none)."""
     samples = sample_end - sample_begin
     total = tile_width * tile_height * samples
     for start in range(0, total, CHUNK_PATHS):
@@ -908,10 +921,15 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
         px, py = x0 + column, y0 + row
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             pixel_keys = pixel_key(seed, band, py * ks.camera.width + px)
-            xyz, transparent = _trace(ks, px, py, pixel_keys, (sample_begin + sample).astype(np.uint64))
+            xyz, transparent, spectrum = _trace(ks, px, py, pixel_keys, (sample_begin + sample).astype(np.uint64))
         np.add.at(sum_xyz, (row, column), xyz)
         np.add.at(sum_sq, (row, column), xyz * xyz)
         np.add.at(sum_transparent, (row, column), transparent)
+        if sum_spectrum.shape[2] and spectrum is not None:
+            bins, values = spectrum
+            inside = bins >= 0  # in the order the Numba kernel adds them: by path, then by camera wavelength
+            np.add.at(sum_spectrum, (np.broadcast_to(row[:, None], bins.shape)[inside],
+                                     np.broadcast_to(column[:, None], bins.shape)[inside], bins[inside]), values[inside])
 
 
 def set_threads(count: int) -> None:

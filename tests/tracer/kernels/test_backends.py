@@ -66,23 +66,26 @@ def chromatic():
 
 
 def heterogeneous():
-    """Gaussian blobs with a density-dependent albedo, a finite sun and an environment, in two bands."""
+    """Gaussian blobs with a density-dependent albedo, a finite sun and an environment, in two bands, keeping the
+    spectral image (20 nm bins; the bands split at 595 nm, inside a bin)."""
     albedo = np.stack([spectra.constant(value).values for value in (0.99, 0.9, 0.7)])
     medium = Medium(name="blobs", density=blob_grid(), density_scale=8.0, extinction=spectra.constant(1.0),
                     albedo_densities=np.array([0.0, 0.5, 1.0]), albedo_table=albedo,
                     anisotropy=spectra.constant(0.5))
     lights = [s.sun([0.3, 0.4, 1.0], 3.0, angle=0.3), s.environment(0.3)]
-    return s.scene(s.ortho_camera(8, 8, scale=2.4), [medium], lights, bands=2)
+    return s.scene(s.ortho_camera(8, 8, scale=2.4), [medium], lights, bands=2, spectrum=True, spectrum_start=365.0,
+                   spectrum_end=825.0, spectrum_step=20.0)
 
 
 def fluorescence():
-    """A scattering slab with a UV-excited fluorophore under a UV environment and a weak visible sun."""
+    """A scattering slab with a UV-excited fluorophore under a UV environment and a weak visible sun, keeping the
+    spectral image (the default bins)."""
     slab = s.box_grid(cells=(16, 16, 4), size=(6.0, 6.0, 0.4))
     fluorophore = Fluorescence(spectra.window(spectra.constant(3.0), 300, 340), spectra.gaussian(550, 20), 0.8)
     medium = s.medium(slab, extinction=0.5, albedo=0.9, g=0.2, fluorescence=fluorophore)
     uv = Light(kind="environment", spectrum=spectra.window(spectra.constant(1.0), 280, 350), strength=580.0,
                unit="radiant")  # 580 W·m⁻²·sr⁻¹: the radiance of the old rule for a strength-1 UV light
-    return s.scene(s.ortho_camera(8, 8, scale=2.0), [medium], [uv, s.sun([0, 0.3, 1], 0.3)])
+    return s.scene(s.ortho_camera(8, 8, scale=2.0), [medium], [uv, s.sun([0, 0.3, 1], 0.3)], spectrum=True)
 
 
 def blackbody():
@@ -196,14 +199,15 @@ SCENES = {build.__name__: build for build in (grey_furnace, chromatic, heterogen
 
 
 def render_film(scene, backend, seed, spp=SPP) -> Film:
-    """All samples of every band in one `render_unit` call each (one wavefront for the NumPy backend)."""
+    """All samples of every band in one `render_unit` call each (one wavefront for the NumPy backend), with the
+    spectral image where the scene keeps one."""
     camera = scene.camera
     bands = band_scenes(scene)
-    film = Film(camera.width, camera.height, len(bands))
+    film = Film(camera.width, camera.height, len(bands), bands[0].wavelengths.spectrum_edges)
     for band, kernel_scene in enumerate(bands):
-        sum_xyz, sum_sq, sum_transparent = render_unit(kernel_scene, band, (0, spp),
-                                                       (0, 0, camera.width, camera.height), seed, backend)
-        film.add(band, 0, 0, sum_xyz, sum_sq, spp, sum_transparent)
+        sums = render_unit(kernel_scene, band, (0, spp), (0, 0, camera.width, camera.height), seed, backend,
+                           spectrum=film.bins > 0)
+        film.add(band, 0, 0, sums[0], sums[1], spp, *sums[2:])
     return film
 
 
@@ -291,6 +295,29 @@ def test_same_seed_traces_the_same_paths(films, name):
     assert close.all(), f"only {np.mean(close):.1%} of pixel values agree"
     close = np.isclose(numpy_film.sum_transparent, numba_film.sum_transparent, rtol=1e-12, atol=1e-300)
     assert close.all(), f"only {np.mean(close):.1%} of pixel transparencies agree"
+    assert numba_film.sum_spectrum.shape == numpy_film.sum_spectrum.shape
+    close = np.isclose(numpy_film.sum_spectrum, numba_film.sum_spectrum, rtol=1e-12, atol=1e-300)
+    assert close.all(), f"only {np.mean(close):.1%} of spectral bins agree"
+
+
+@pytest.mark.parametrize("name", [name for name, build in SCENES.items() if build().settings.spectrum])
+def test_spectra_agree_and_integrate_to_the_films_xyz(films, name):
+    """Independent renders (Numba seed 1, NumPy seed 2) estimate the same image mean per spectral bin within 4
+    standard errors (from the spread of the two films' pixels; a correct pair fails a bin with probability ~6e-5),
+    and each film's bins, integrated against the tracer's XYZ weights, give its image mean Y within 2 % (the bins'
+    discretisation and the parts of the spectrum outside them, 360–365 and 825–830 nm or 360–380 and 780–830 nm)."""
+    numba_film, numpy_film = films(name)["numba", 1], films(name)["numpy", 2]
+    means = []
+    for film in (numba_film, numpy_film):
+        values = film.spectrum.reshape(-1, film.bins)
+        means.append((values.mean(axis=0), values.std(axis=0, ddof=1) / np.sqrt(values.shape[0])))
+        weights = colorimetry.xyz_weights()[1]
+        per_bin = [np.trapezoid(weights[(GRID >= lo) & (GRID <= hi)], GRID[(GRID >= lo) & (GRID <= hi)])
+                   for lo, hi in zip(film.spectrum_edges[:-1], film.spectrum_edges[1:])]
+        assert abs(values.mean(axis=0) @ per_bin - film.mean_xyz[1]) <= 0.02 * film.mean_xyz[1]
+    (mean_a, error_a), (mean_b, error_b) = means
+    bound = SIGMAS * np.hypot(error_a, error_b)
+    assert np.all((np.abs(mean_a - mean_b) <= bound) | (bound == 0)), np.max(np.abs(mean_a - mean_b) / bound)
 
 
 def test_grey_furnace_returns_the_environment(films):
