@@ -100,8 +100,9 @@ def _parser() -> argparse.ArgumentParser:
                              "is 1 − the share they saw (default: the scene's render.transparent)")
     render.add_argument("--threads", type=int, help="worker threads for the numba backend")
     render.add_argument("--passes", metavar="NAMES",
-                        help="data passes to write in the EXR beside the image, comma-separated: Depth, Mist, Normal, "
-                             "CryptoObject, CryptoMaterial (default: the scene's render.passes)")
+                        help="data and light passes to write in the EXR beside the image, comma-separated: Depth, Mist, "
+                             "Normal, CryptoObject, CryptoMaterial, Emit, Env, VolumeDir, VolumeInd (default: the "
+                             "scene's render.passes)")
     render.add_argument("--stats", type=Path, help="write timing, samples per second and mean XYZ as JSON")
     render.add_argument("--quiet", action="store_true", help="no progress bar")
     farm = render.add_mutually_exclusive_group()
@@ -173,7 +174,7 @@ def _render(args, written: list) -> int:
 
 
 def with_passes(scene, names: str | None):
-    """`scene` asking for the data passes named in `names` (--passes: comma-separated), or as it is."""
+    """`scene` asking for the data and light passes named in `names` (--passes: comma-separated), or as it is."""
     if names is None:
         return scene
     passes = tuple(name.strip() for name in names.split(",") if name.strip())

@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import adaptive, sampling
-from .passes import PassImages, first_hit_ready, render_passes
+from .light_passes import light_categories, light_images
+from .passes import DATA_PASSES, PassImages, first_hit_ready, render_passes
 from .errors import SpectralError
 from .film import Film
 from .kernels.layout import KernelScene
@@ -50,23 +51,24 @@ def band_scenes(scene: Scene, kernel_scene: KernelScene | None = None) -> list[K
 
 
 def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
-                seed: int, backend: str = "numba") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                seed: int, backend: str = "numba", light_categories: int = 0) -> tuple[np.ndarray, ...]:
     """Σ XYZ, Σ XYZ² and Σ transparency over samples [begin, end) of each pixel in tile (x0, y0, width,
-    height)."""
-    arguments = _tile_arguments(kernel_scene, band, samples, tile, seed)
+    height); with `light_categories` (`light_passes.light_categories`), also Σ XYZ of each light category."""
+    arguments = _tile_arguments(kernel_scene, band, samples, tile, seed, light_categories)
     backend_module(backend).render_tile(*arguments)
-    return arguments[-3:]
+    return arguments[-4:] if light_categories else arguments[-4:-1]
 
 
 def _tile_arguments(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
-                    seed: int) -> tuple:
-    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last three). Integers go as
+                    seed: int, light_categories: int = 0) -> tuple:
+    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last four; the light
+    categories' has `light_categories` slots per pixel, none for no light passes). Integers go as
     int64 (the seed as uint64, its whole range) whatever their values, so that no value changes the
     compiled kernel's argument types (a seed of 2⁶³ would be typed uint64, and compile a second kernel)."""
     x0, y0, width, height = (np.int64(value) for value in tile)
     return (kernel_scene, x0, y0, width, height, np.int64(samples[0]), np.int64(samples[1]), np.uint64(seed),
             np.int64(band), np.zeros((int(height), int(width), 3)), np.zeros((int(height), int(width), 3)),
-            np.zeros((int(height), int(width))))
+            np.zeros((int(height), int(width))), np.zeros((int(height), int(width), int(light_categories), 3)))
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
@@ -160,7 +162,8 @@ class RenderResult:
     cancelled: bool = False
     seconds: float = 0.0
     stats: dict = field(default_factory=dict)
-    passes: PassImages = field(default_factory=lambda: PassImages({}, {}))  # the data passes the scene asks for (`passes`), once rendered
+    # the data and light passes the scene asks for (`passes`, `light_passes`), once rendered
+    passes: PassImages = field(default_factory=lambda: PassImages({}, {}))
 
 
 def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, backend: str | None = None,
@@ -182,7 +185,8 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     start = time.perf_counter()
     bands = band_scenes(scene)
     camera = scene.camera
-    film = Film(camera.width, camera.height, len(bands))
+    categories = light_categories(settings)
+    film = Film(camera.width, camera.height, len(bands), categories)
     total = camera.width * camera.height * spp * len(bands)
     done = 0
     cancelled = backend == "numba" and not kernel_ready(module, bands[0], seed, cancel, notice)
@@ -194,20 +198,22 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
             break
         with KERNEL_LAUNCH:
             unit_start = time.perf_counter()
-            sum_xyz, sum_sq, sum_transparent = render_unit(bands[band], band, samples, tile, seed, backend)
+            sums = render_unit(bands[band], band, samples, tile, seed, backend, categories)
             unit_seconds_taken = time.perf_counter() - unit_start
         size = samples[1] - samples[0]
         tiler.measured(tile, size, unit_seconds_taken)
-        film.add(band, tile[1], tile[0], sum_xyz, sum_sq, size, sum_transparent)
+        film.add(band, tile[1], tile[0], *sums[:2], size, *sums[2:])
         done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)
     data_passes = PassImages({}, {})
-    if settings.passes and backend == "numba" and not cancelled:
+    wants_data = any(name in DATA_PASSES for name in settings.passes)
+    if wants_data and backend == "numba" and not cancelled:
         cancelled = not first_hit_ready(bands[0], cancel, notice)
-    if settings.passes and not cancelled:
+    if wants_data and not cancelled:
         with KERNEL_LAUNCH:
             data_passes = render_passes(scene, bands[0], spp, seed, backend)
+    data_passes.images.update(light_images(film, settings))
     seconds = time.perf_counter() - start
     return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend),
                         passes=data_passes)
