@@ -101,7 +101,7 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--threads", type=int, help="worker threads for the numba backend")
     render.add_argument("--passes", metavar="NAMES",
                         help="data and light passes to write in the EXR beside the image, comma-separated: Depth, Mist, "
-                             "Normal, CryptoObject, CryptoMaterial, Emit, Env, VolumeDir, VolumeInd (default: the "
+                             "Normal, CryptoObject, CryptoMaterial, Emission, Environment, Volume Direct, Volume Indirect (default: the "
                              "scene's render.passes)")
     render.add_argument("--stats", type=Path, help="write timing, samples per second and mean XYZ as JSON")
     render.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -5,7 +5,7 @@ any vertex, the background a camera ray escapes to, the light arriving at the fi
 sums each category's XYZ per pixel and band (`Film.sum_light`). A pass is its category's mean over the samples,
 summed over bands, in linear Rec.709 as Combined. The identity:
 
-    Emit + Env + VolumeDir + VolumeInd + (light whose first vertex is on a surface) = Combined
+    Emission + Environment + Volume Direct + Volume Indirect + (light whose first vertex is on a surface) = Combined
 
 per pixel, within float error. The last term is Cycles' (DiffDir + DiffInd) × DiffCol; the engine makes no Diffuse
 Color pass to divide it by, so Diffuse Direct and Indirect are not offered (the render's warning names them).
@@ -16,7 +16,8 @@ import numpy as np
 from . import colorimetry
 from .kernels.light_split import CATEGORIES, EMISSION, ENVIRONMENT, VOLUME_DIRECT, VOLUME_INDIRECT
 
-EMIT, ENV, VOLUME_DIR, VOLUME_IND = "Emit", "Env", "VolumeDir", "VolumeInd"
+# Blender 5's names of the passes (its Render Result, EXR channels `ViewLayer.Emission.R`, …)
+EMIT, ENV, VOLUME_DIR, VOLUME_IND = "Emission", "Environment", "Volume Direct", "Volume Indirect"
 LIGHT_PASSES = {EMIT: EMISSION, ENV: ENVIRONMENT, VOLUME_DIR: VOLUME_DIRECT, VOLUME_IND: VOLUME_INDIRECT}  # slot
 
 

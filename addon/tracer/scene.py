@@ -251,7 +251,8 @@ class RenderSettings:
     # film's alpha is 1 − the share they saw; the infinite lights still light the scene.
     transparent: bool = False
     # Passes written beside the image: data passes (`passes.DATA_PASSES`: Depth, Mist, Normal, CryptoObject,
-    # CryptoMaterial) and light passes (`light_passes.LIGHT_PASSES`: Emit, Env, VolumeDir, VolumeInd), with
+    # CryptoMaterial) and light passes (`light_passes.LIGHT_PASSES`: Emission, Environment, Volume Direct,
+    # Volume Indirect), with
     # World ▸ Mist Pass's start, depth and falloff and Cryptomatte's levels.
     passes: tuple[str, ...] = ()
     mist_start: float = 5.0

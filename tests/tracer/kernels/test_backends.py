@@ -192,7 +192,7 @@ def transparent_holdout():
     return s.scene(s.perspective_camera(8, 8, fov_degrees=50.0), [medium], lights, [floor, hole], transparent=True)
 
 
-LIGHT_PASSES = ("Emit", "Env", "VolumeDir", "VolumeInd")
+LIGHT_PASSES = ("Emission", "Environment", "Volume Direct", "Volume Indirect")
 
 
 def light_passes():
