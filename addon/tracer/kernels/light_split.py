@@ -20,11 +20,12 @@ ray (before the first vertex), Direct when it is on the ray leaving the first ve
 The diffuse categories hold light × the surface's colour (Cycles divides its Diffuse Direct and Indirect passes
 by a Diffuse Color pass, which the engine does not make): kept for the identity, not written as passes.
 
-Clamping (Cycles' Light Paths ▸ Clamping, `film_clamp_light`): the direct part of a sample (Cycles' bounce 0: everything
-up to the second mark, `AFTER_NEE`: emission the camera sees and next-event estimation at the first vertex) and its
-indirect part (the rest, the light that the ray leaving the first vertex hits included) are each scaled down so that the sum of their linear Rec.709
-components |R| + |G| + |B| is at most 3 × the limit (Cycles multiplies the limit by 3); a limit of 0 is off.
-Cycles clamps each contribution as it is added; here each sample's part, per wavelength band.
+Clamping (Cycles' Light Paths ▸ Clamping, `film_clamp_light`): the direct part of a sample (Cycles' bounce 0:
+everything up to the second mark, `AFTER_NEE`: emission the camera sees and next-event estimation at the first
+vertex) and its indirect part (the rest, the light that the ray leaving the first vertex hits included) are each
+scaled down so that the sum of their linear Rec.709 components |R| + |G| + |B| is at most 3 × the limit (Cycles
+stores the limit × 3); a limit of 0 is off. Cycles clamps each contribution as it is added; here each sample's
+part, per wavelength band.
 
 Shared by both backends (`shared_math`). Part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`).
 """

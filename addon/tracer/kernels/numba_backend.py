@@ -1222,8 +1222,8 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, splitting, n, path, vertex, light, tracke
 def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
                    sum_transparent, sum_light_passes):
     """Samples [sample_begin, sample_end) of the tile's pixels [first, last) (row-major), added to `sum_xyz`,
-    `sum_sq`, `sum_transparent` and `sum_light_passes`. The path's buffers are made once for them all: each allocation updates
-    Numba's global allocation counters atomically, which threads contend for."""
+    `sum_sq`, `sum_transparent` and `sum_light_passes`. The path's buffers are made once for them all: each
+    allocation updates Numba's global allocation counters atomically, which threads contend for."""
     media = max(ks.media.density_scale.shape[0], 1)
     path, vertex = _new_path(media), _new_coefficients(media)
     light, tracker, fl, hit = _new_light_sample(), _new_tracker(media), _new_fluorescent(), _new_hit()
@@ -1254,7 +1254,8 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
     light_sums = _borrowed(light_sums)
     n = ks.wavelengths.per_path
     # light passes or clamping: the camera paths take their marks (`light_split`); else no extra work
-    splitting = light_sums.shape[0] > 0 or ks.termination.clamp_direct > 0.0 or ks.termination.clamp_indirect > 0.0
+    term = ks.termination
+    splitting = light_sums.shape[0] > 0 or term.clamp_direct > 0.0 or term.clamp_indirect > 0.0
     path.stream[2] = pixel_key(seed, band, pixel)
     sx, sy, sz, qx, qy, qz, st = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for sample in range(sample_begin, sample_end):
