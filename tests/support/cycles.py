@@ -32,9 +32,11 @@ def cycles_rgb(scene, folder: Path, spp: int, seed: int, bounces: int = 64, alph
     cycles.use_adaptive_sampling = False
     cycles.max_bounces = cycles.volume_bounces = cycles.transparent_max_bounces = bounces
     cycles.diffuse_bounces = cycles.glossy_bounces = cycles.transmission_bounces = bounces
-    # the engine's Light Paths ▸ Clamping (Blender's defaults: direct off, indirect 10), so both sides clamp alike
-    cycles.sample_clamp_direct = scene.spectral.clamp_direct
-    cycles.sample_clamp_indirect = scene.spectral.clamp_indirect
+    # the engine's Light Paths ▸ Clamping (Blender's defaults: direct off, indirect 10), so both sides clamp alike;
+    # none where the add-on is not registered (tests of the tracer's own scenes, whose default is no clamping)
+    spectral = getattr(scene, "spectral", None)
+    cycles.sample_clamp_direct = spectral.clamp_direct if spectral is not None else 0.0
+    cycles.sample_clamp_indirect = spectral.clamp_indirect if spectral is not None else 0.0
     cycles.volume_biased, cycles.light_sampling_threshold, cycles.use_volume_guiding = False, 0.0, False
     cycles.pixel_filter_type, cycles.filter_width = "BOX", 1.0  # the tracer's pixel
     settings = scene.render.image_settings
