@@ -127,3 +127,17 @@ def test_clamping_settings_have_cycles_defaults_and_are_exported(registered):
     context = SimpleNamespace(scene=scene, engine=scene.render.engine)
     drawn = {args[1] for kind, args, _ in draw(bpy.types.SPECTRAL_PT_render_clamping, context).calls if kind == "prop"}
     assert drawn == {"clamp_direct", "clamp_indirect"}
+
+
+def test_the_cycles_emulation_names_the_clamping_it_leaves_out(registered):
+    """The emulation renders Cycles unclamped (Cycles' clamp would treat each render's three bands as R, G, B): with
+    clamping set, its warning says so; without, nothing."""
+    from addon.jobs.kinds import render_job
+
+    scene, _ = volume_scene()
+    scene.spectral.renderer = "CYCLES"
+    job = render_job(scene, export_scene(bpy.context.evaluated_depsgraph_get()))
+    assert any("does not clamp" in w and "Indirect 10" in w for w in job.warnings), job.warnings
+    scene.spectral.clamp_indirect = 0.0
+    job = render_job(scene, export_scene(bpy.context.evaluated_depsgraph_get()))
+    assert not any("does not clamp" in w for w in job.warnings)
