@@ -139,3 +139,24 @@ def test_clamp_limits_are_checked():
     """A negative limit is refused, naming the setting."""
     with pytest.raises(SpectralError, match="render.clamp_indirect"):
         check_settings(dataclasses.replace(slab(0.1).settings, clamp_indirect=-1.0))
+
+
+def test_the_command_line_writes_the_light_passes_with_blenders_names(tmp_path):
+    """`--passes` with light passes (names with spaces, as Blender 5's): the EXR holds ViewLayer.Emission.R/G/B, …,
+    ViewLayer.Volume Indirect.R/G/B, and with a scene read back from its file (clamping off) they sum to Combined
+    within float32 rounding where no surface is in view (the slab alone, under a sun, with an environment)."""
+    from addon.tracer import cli, image_io, scene_io
+
+    scene = slab(0.5, spp=4)
+    scene = dataclasses.replace(scene, lights=(*scene.lights, s.environment(0.3)))
+    folder = scene_io.save_scene(scene, tmp_path / "scene")
+    out = tmp_path / "out.exr"
+    code = cli.main(["render", str(folder), "--out", str(out), "--backend", "numpy", "--quiet", "--passes",
+                     ",".join(PASSES)])
+    assert code == 0
+    channels = image_io.read_exr(out)
+    for letter in "RGB":
+        total = sum(channels[f"ViewLayer.{name}.{letter}"].astype(np.float64) for name in PASSES)
+        combined = channels[f"ViewLayer.Combined.{letter}"]
+        np.testing.assert_allclose(total, combined, rtol=1e-5, atol=1e-6 * np.abs(combined).max())
+    assert channels["ViewLayer.Volume Direct.G"].mean() > 0.0 and channels["ViewLayer.Environment.G"].mean() > 0.0
