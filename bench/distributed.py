@@ -63,7 +63,7 @@ def in_process(scene: Scene, tile_size: int) -> Film:
     merger = PassMerger(film, sizes, tiles)
     for unit in units:
         merger.add(unit, *single.render_unit(bands[unit.band], unit.band, unit.samples, unit.tile,
-                                             settings.seed, settings.backend))
+                                             settings.seed, settings.backend)[:3])
     return film
 
 

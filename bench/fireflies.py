@@ -20,8 +20,16 @@ D65 sun and a faint sky (`--sky`, radiance Y; the benchmark's sky is 0.5).
    single event makes their excess, and what clamping the contributions from depth 2 on (biased, as
    Cycles' Clamp Indirect; computed from the records, not in the tracer) would cost and gain.
 
-Nothing is asserted. python -m bench.fireflies [--quick]
+3. Light Paths ▸ Clamping in the tracer (`kernels/light_split.py`): the relative RMSE of Y at 16 spp (`--seeds`
+   images) against the `--reference-spp` reference, clamping off and at Blender's defaults (Direct 0, Indirect 10),
+   and a tighter Indirect 1; each clamped image against the unclamped reference (error with the bias) and against
+   its own clamped reference (noise alone), with the z figures of part 1 and the mean Y the clamp takes away.
+   `--clamping` runs this part alone.
+
+Nothing is asserted. python -m bench.fireflies [--quick] [--clamping]
 """
+
+import dataclasses
 
 import argparse
 import time
@@ -50,6 +58,7 @@ def parse(argv=None):
     parser.add_argument("--depths", type=int, nargs="*", default=[4, 8, 16])
     parser.add_argument("--k", type=float, default=5.0, help="z above which a pixel counts as an outlier")
     parser.add_argument("--max-depth", type=int, default=64)
+    parser.add_argument("--clamping", action="store_true", help="part 3 only")
     args = parser.parse_args(argv)
     if args.quick:
         args.reference_spp, args.seeds, args.depths = 256, 2, [8]
@@ -126,12 +135,13 @@ class Recorder:
         for name, function in self.saved.items():
             setattr(nb, name, function)
 
-    def _trace(self, ks, px, py, pixel_keys, samples):
-        xyz = self.saved["_trace"](ks, px, py, pixel_keys, samples)
+    def _trace(self, ks, px, py, pixel_keys, samples, light_passes=False):
+        traced = self.saved["_trace"](ks, px, py, pixel_keys, samples, light_passes)
+        xyz = traced[0]
         self.path_pixel.append(np.stack(np.broadcast_arrays(py, px), axis=1))
         self.path_y.append(xyz[:, 1])
         self.offset += xyz.shape[0]
-        return xyz
+        return traced
 
     def _sample_lights(self, ks, lights, points, u1, u2, lams):
         out = self.saved["_sample_lights"](ks, lights, points, u1, u2, lams)
@@ -278,14 +288,43 @@ def part_oracle(args, found):
         print(f"   {c:6g} {cut.sum() / e['y'].sum():7.2%}   {describe(clamped)}")
 
 
+def clamped(scene, direct, indirect):
+    return dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, clamp_direct=direct,
+                                                                   clamp_indirect=indirect))
+
+
+def part_clamping(args):
+    scene = cloud_preset_scene(args, args.max_depth)
+    unclamped_film = render(scene, spp=args.reference_spp, seed=REFERENCE_SEED).film
+    reference, sigma = luminance_and_sigma(unclamped_film)
+    sigma_16 = np.maximum(sigma / np.sqrt(16), 1e-12)
+    print(f"\n3. Clamping in the tracer: Y at 16 spp ({args.seeds} seeds) against {args.reference_spp} spp, "
+          f"relative RMSE = √mean((Y16 − Yref)²) / mean(Yref)")
+    print(f"{'clamp (direct, indirect)':26} {'vs unclamped ref':>16} {'vs own ref':>10} {'mean Y lost':>11}   "
+          f"z vs unclamped: {'p50':>6} {'p90':>6} {'p99':>6} {'max':>8}  {'>3':>7} {'>5':>7} {'>10':>7}")
+    for direct, indirect in ((0.0, 0.0), (0.0, 10.0), (0.0, 1.0)):
+        version = clamped(scene, direct, indirect)
+        own = reference if indirect == 0.0 and direct == 0.0 else render(
+            version, spp=args.reference_spp, seed=REFERENCE_SEED).film.xyz[..., 1]
+        images = np.stack([render(version, spp=16, seed=seed).film.xyz[..., 1] for seed in range(1, args.seeds + 1)])
+        rmse = np.sqrt(np.mean((images - reference) ** 2)) / reference.mean()
+        rmse_own = np.sqrt(np.mean((images - own) ** 2)) / own.mean()
+        lost = 1.0 - own.mean() / reference.mean()
+        z = np.abs(images - reference) / sigma_16
+        label = "off" if direct == indirect == 0.0 else f"{direct:g}, {indirect:g}"
+        print(f"{label:26} {rmse:16.4f} {rmse_own:10.4f} {lost:11.2%}   {'':16}{describe(z)}", flush=True)
+
+
 def main(argv=None) -> None:
     args = parse(argv)
     print(machine())
     print(f"Cloud preset optics (σ_t 20 × density, albedo 0.99, g 0.8) on the benchmark cloud 64³, D65 sun "
           f"(irradiance Y 3), sky Y {args.sky:g}, {args.width}×{args.height}")
     render(cloud_preset_scene(args, args.max_depth), spp=1)  # compile or load the kernel, untimed
-    found = part_numba(args)
-    part_oracle(args, found)
+    if not args.clamping:
+        found = part_numba(args)
+        part_oracle(args, found)
+    part_clamping(args)
 
 
 if __name__ == "__main__":

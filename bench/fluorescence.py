@@ -94,7 +94,7 @@ def measure(source_thickness: float, pixels: int, passes: int) -> dict:
     samples, seconds = [], 0.0
     for index in range(passes):
         start = time.perf_counter()
-        sums, _, _ = render_unit(kernel_scene, 0, (index, index + 1), (0, 0, pixels, pixels), seed=3)
+        sums = render_unit(kernel_scene, 0, (index, index + 1), (0, 0, pixels, pixels), seed=3)[0]
         seconds += time.perf_counter() - start
         samples.append(sums[..., 1].ravel())
     y = np.concatenate(samples)

@@ -67,7 +67,7 @@ class CopyRenderer:
             start = time.perf_counter()
             self.module.render_tile(self.kernel_scene, 0, 0, width, height, self.next_sample,
                                     self.next_sample + size, self.seed, 0, sum_xyz, sum_sq, sum_transparent,
-                                    np.zeros((height, width, 0)))
+                                    np.zeros((height, width, 0, 3)), np.zeros((height, width, 0)))  # no light passes, no spectrum
             seconds += time.perf_counter() - start
             film.add(0, 0, 0, sum_xyz, sum_sq, size, sum_transparent)
             self.next_sample += size

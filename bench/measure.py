@@ -142,7 +142,7 @@ def render_ours(kernel_scene: KernelScene, spp: int, seed: int = 0, first_sample
     for size in pass_sizes(spp, first=min(16, spp)):
         start = time.perf_counter()
         sum_xyz, sum_sq, sum_transparent = render_unit(kernel_scene, 0, (begin, begin + size), (0, 0, width, height),
-                                                       seed)
+                                                       seed)[:3]
         seconds += time.perf_counter() - start
         film.add(0, 0, 0, sum_xyz, sum_sq, size, sum_transparent)
         begin += size

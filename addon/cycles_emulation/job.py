@@ -12,6 +12,7 @@ the user's own, and every step restores it even when Cycles fails. Cycles' image
 grids (`fluids`, written once) go to a temporary folder, removed when the job ends.
 """
 
+import dataclasses
 import tempfile
 import time
 from pathlib import Path
@@ -69,6 +70,12 @@ class EmulationJob(Job):
         settings = scene.spectral
         band_count = settings.emulation_bands if settings.emulation_band_mode == "FIXED" else None
         export = without_passes(export, "the Cycles emulation")
+        tracer_settings = export.scene.settings
+        if tracer_settings.clamp_direct > 0 or tracer_settings.clamp_indirect > 0:
+            # Cycles' clamp would act on each render's three bands as if they were R, G and B: not the tracer's
+            export = dataclasses.replace(export, warnings=[
+                *export.warnings, f"the Cycles emulation does not clamp: Light Paths ▸ Clamping (Direct "
+                f"{tracer_settings.clamp_direct:g}, Indirect {tracer_settings.clamp_indirect:g}) left out of the render"])
         return cls(scene, export.scene, export.warnings, band_count=band_count,
                    max_renders=settings.emulation_max_renders, shader=settings.emulation_shader, spp=spp)
 

@@ -66,7 +66,8 @@ def render_settings(scene) -> RenderSettings:
                           wavelength_sampling=s.wavelength_sampling, wavelengths_per_path=int(s.wavelengths_per_path),
                           lambda_min=s.lambda_min, lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf,
                           backend=s.backend, noise_threshold=s.adaptive_threshold if s.use_adaptive_sampling else 0.0,
-                          min_samples=s.adaptive_min_samples, transparent=bool(scene.render.film_transparent))
+                          min_samples=s.adaptive_min_samples, transparent=bool(scene.render.film_transparent),
+                          clamp_direct=s.clamp_direct, clamp_indirect=s.clamp_indirect)
 
 
 def unsupported_settings(scene) -> list[str]:

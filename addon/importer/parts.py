@@ -36,6 +36,7 @@ def new_scene(name: str, width: int, height: int, settings: RenderSettings):
     if settings.noise_threshold > 0:
         ours.adaptive_threshold = settings.noise_threshold
     ours.adaptive_min_samples = settings.min_samples
+    ours.clamp_direct, ours.clamp_indirect = settings.clamp_direct, settings.clamp_indirect
     scene.render.film_transparent = settings.transparent
     scene.frame_start = scene.frame_end = scene.frame_current = 1
     return scene

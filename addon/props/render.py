@@ -41,6 +41,17 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
                                 default=DEFAULTS.seed, min=0)
     max_bounces: bpy.props.IntProperty(name="Max Bounces", description="Most scattering events along a path",
                                        default=DEFAULTS.max_depth, min=1, soft_max=1024)
+    # Light Paths ▸ Clamping, with Cycles' defaults (the scene file's are 0: no clamping)
+    clamp_direct: bpy.props.FloatProperty(
+        name="Direct Light", default=0.0, min=0.0, soft_max=100.0,
+        description="Largest light a sample may bring from emitters the camera sees and from lights reaching the "
+                    "first bounce through next-event estimation (mean of linear R, G and B), as Cycles clamps it: "
+                    "brighter samples are scaled down, which removes fireflies but darkens the image. 0: no clamping")
+    clamp_indirect: bpy.props.FloatProperty(
+        name="Indirect Light", default=10.0, min=0.0, soft_max=100.0,
+        description="Largest light a sample may bring after its first bounce (mean of linear R, G and B), as "
+                    "Cycles clamps it: brighter samples are scaled down, which removes fireflies but darkens the "
+                    "image. 0: no clamping")
     bands: bpy.props.IntProperty(name="Bands", description="Render the wavelength range in this many passes",
                                  default=DEFAULTS.bands, min=1, soft_max=64)
     wavelength_sampling: bpy.props.EnumProperty(

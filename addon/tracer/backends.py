@@ -41,16 +41,18 @@ class Backend:
 
 
 def tile_arguments(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
-                   seed: int, spectrum: bool = False) -> tuple:
-    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last four; the spectrum's has no
-    bins unless `spectrum`). Integers go as int64 (the seed as uint64, its whole range) whatever their values, so
-    that no value changes the compiled kernel's argument types (a seed of 2⁶³ would be typed uint64, and compile
-    a second kernel)."""
+                   seed: int, light_categories: int = 0, spectrum: bool = False) -> tuple:
+    """The arguments of a backend's `render_tile`, with zeroed accumulators (the last five: Σ XYZ, Σ XYZ²,
+    Σ transparency, the light categories' with `light_categories` slots per pixel, none for no light passes, and
+    the spectrum's, with no bins unless `spectrum`). Integers go as int64 (the seed as uint64, its whole range)
+    whatever their values, so that no value changes the compiled kernel's argument types (a seed of 2⁶³ would be
+    typed uint64, and compile a second kernel)."""
     x0, y0, width, height = (np.int64(value) for value in tile)
     bins = max(kernel_scene.wavelengths.spectrum_edges.size - 1, 0) if spectrum else 0
+    h, w = int(height), int(width)
     return (kernel_scene, x0, y0, width, height, np.int64(samples[0]), np.int64(samples[1]), np.uint64(seed),
-            np.int64(band), np.zeros((int(height), int(width), 3)), np.zeros((int(height), int(width), 3)),
-            np.zeros((int(height), int(width))), np.zeros((int(height), int(width), bins)))
+            np.int64(band), np.zeros((h, w, 3)), np.zeros((h, w, 3)), np.zeros((h, w)),
+            np.zeros((h, w, int(light_categories), 3)), np.zeros((h, w, bins)))
 
 
 def _numba_kernels() -> ModuleType:

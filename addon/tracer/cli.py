@@ -100,8 +100,9 @@ def _parser() -> argparse.ArgumentParser:
                              "is 1 − the share they saw (default: the scene's render.transparent)")
     render.add_argument("--threads", type=int, help="worker threads for the numba backend")
     render.add_argument("--passes", metavar="NAMES",
-                        help="data passes to write in the EXR beside the image, comma-separated: Depth, Mist, Normal, "
-                             "CryptoObject, CryptoMaterial (default: the scene's render.passes)")
+                        help="data and light passes to write in the EXR beside the image, comma-separated: Depth, "
+                             "Mist, Normal, CryptoObject, CryptoMaterial, Emission, Environment, Volume Direct, "
+                             "Volume Indirect (default: the scene's render.passes)")
     render.add_argument("--spectral-exr", type=Path, metavar="PATH",
                         help="also write the spectral image: an EXR with one channel per wavelength bin, in the layout "
                              "of Fichet et al. 2021 (docs/scene-format.md; bins: the scene's render.spectrum_*)")
@@ -187,7 +188,7 @@ def _render(args, written: list) -> int:
 
 
 def with_passes(scene, names: str | None):
-    """`scene` asking for the data passes named in `names` (--passes: comma-separated), or as it is."""
+    """`scene` asking for the data and light passes named in `names` (--passes: comma-separated), or as it is."""
     if names is None:
         return scene
     passes = tuple(name.strip() for name in names.split(",") if name.strip())

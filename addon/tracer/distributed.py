@@ -93,7 +93,7 @@ def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile
         return TaskResult(ran, _worker_address(), None, None, None)
     backends.named(backend).kernels.set_threads(threads or _threads_per_task())
     return TaskResult(ran, _worker_address(), *render.render_unit(scene_data.band_scenes[band], band, samples, tile,
-                                                                  seed, backend))
+                                                                  seed, backend)[:3])
 
 
 def _worker_address() -> str:

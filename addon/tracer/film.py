@@ -1,5 +1,6 @@
-"""The film: per-pixel XYZ sums and squared sums and transparency sums for each wavelength band (and, for a spectral
-image, sums of each wavelength bin's estimate), and what they estimate.
+"""The film: per-pixel XYZ sums and squared sums, transparency sums and, for the light passes, each light
+category's XYZ sums (`kernels/light_split.py`) for each wavelength band (and, for a spectral image, sums of each
+wavelength bin's estimate), and what they estimate.
 
 Each band is an independent estimator of its part of the spectrum; the pixel's XYZ is the sum over
 bands of each band's sample mean, and its variance (of that estimate) the sum of the bands' variances
@@ -44,13 +45,17 @@ def check_film_memory(width: int, height: int, bands: int = 1, bins: int = 0) ->
 
 
 class Film:
-    """`spectrum_edges`: the edges of the spectral image's bins in nm (`spectral_film.bin_edges`; empty: none)."""
+    """`light_categories`: the light categories kept for the light passes (`kernels/light_split.py`; 0: none);
+    `spectrum_edges`: the edges of the spectral image's bins in nm (`spectral_film.bin_edges`; empty: none)."""
 
-    def __init__(self, width: int, height: int, bands: int = 1, spectrum_edges=()):
+    def __init__(self, width: int, height: int, bands: int = 1, light_categories: int = 0, spectrum_edges=()):
         self.spectrum_edges = np.asarray(spectrum_edges, dtype=np.float64)
         self.bins = max(self.spectrum_edges.size - 1, 0)
-        check_film_memory(width, height, bands, self.bins)
+        check_film_memory(width, height, bands * (1 + light_categories), self.bins)
         self.width, self.height, self.bands = int(width), int(height), int(bands)
+        self.light_categories = int(light_categories)
+        # Σ XYZ of each light category (`kernels/light_split.py`), for the light passes (`light_passes`)
+        self.sum_light = np.zeros((self.bands, self.height, self.width, self.light_categories, 3))
         self.sum_xyz = np.zeros((self.bands, self.height, self.width, 3))
         self.sum_sq = np.zeros_like(self.sum_xyz)
         self.sum_transparent = np.zeros((self.bands, self.height, self.width))
@@ -58,14 +63,18 @@ class Film:
         self.pixel_samples = np.zeros((self.bands, self.height, self.width), dtype=np.int64)
 
     def add(self, band: int, y0: int, x0: int, sum_xyz: np.ndarray, sum_sq: np.ndarray, samples: int,
-            sum_transparent: np.ndarray | None = None, sum_spectrum: np.ndarray | None = None) -> None:
+            sum_transparent: np.ndarray | None = None, sum_light: np.ndarray | None = None,
+            sum_spectrum: np.ndarray | None = None) -> None:
         """Add a tile's accumulators (rows y0…, columns x0…) over `samples` samples per pixel of `band`
-        (`sum_transparent` None: samples that saw no background; `sum_spectrum` None: no spectrum)."""
+        (`sum_transparent` None: samples that saw no background; `sum_light` None: no light categories;
+        `sum_spectrum` None: no spectrum)."""
         h, w = sum_xyz.shape[:2]
         self.sum_xyz[band, y0:y0 + h, x0:x0 + w] += sum_xyz
         self.sum_sq[band, y0:y0 + h, x0:x0 + w] += sum_sq
         if sum_transparent is not None:
             self.sum_transparent[band, y0:y0 + h, x0:x0 + w] += sum_transparent
+        if sum_light is not None and self.light_categories:
+            self.sum_light[band, y0:y0 + h, x0:x0 + w] += sum_light
         if sum_spectrum is not None and self.bins:
             self.sum_spectrum[band, y0:y0 + h, x0:x0 + w] += sum_spectrum
         self.pixel_samples[band, y0:y0 + h, x0:x0 + w] += samples
@@ -86,6 +95,12 @@ class Film:
         """Estimated mean spectral radiance over each bin per pixel, shape (height, width, bins): the sum over bands
         of each band's mean (0 where no sample has arrived)."""
         return (self.sum_spectrum / np.maximum(self.pixel_samples, 1)[..., None]).sum(axis=0)
+
+    @property
+    def light_xyz(self) -> np.ndarray:
+        """Estimated XYZ of each light category per pixel, shape (height, width, categories, 3); they sum to `xyz`."""
+        counts = np.maximum(self.pixel_samples, 1)[..., None, None]
+        return (self.sum_light / counts).sum(axis=0)
 
     @property
     def alpha(self) -> np.ndarray:

@@ -383,6 +383,9 @@ def compile_scene(scene: Scene) -> KernelScene:
             spectrum_edges=bin_edges(settings),
         ),
         # int64 whatever the value (check_settings bounds it), so that no value changes the kernel's argument types
-        termination=KernelTermination(max_depth=np.int64(settings.max_depth), rr_depth=np.int64(settings.rr_depth)),
+        termination=KernelTermination(max_depth=np.int64(settings.max_depth), rr_depth=np.int64(settings.rr_depth),
+                                      clamp_direct=float(settings.clamp_direct),
+                                      clamp_indirect=float(settings.clamp_indirect),
+                                      xyz_to_rgb=np.array(colorimetry.xyz_to_rgb_matrix("rec709"))),
     )
     return with_band(kernel_scene, settings.wavelength_sampling, *default_band(settings))

@@ -26,10 +26,12 @@ import numpy as np
 from . import checks
 from .errors import SpectralError
 from .kernels.layout import FIRST_HIT_VALUES, KernelScene
+from .light_passes import LIGHT_PASSES
 
 DEPTH, MIST, NORMAL, CRYPTO_OBJECT, CRYPTO_MATERIAL = "Depth", "Mist", "Normal", "CryptoObject", "CryptoMaterial"
 DATA_PASSES = (DEPTH, MIST, NORMAL, CRYPTO_OBJECT, CRYPTO_MATERIAL)  # the names a scene may ask for
-CHANNELS = {DEPTH: "Z", MIST: "Z", NORMAL: "XYZ"}  # a Cryptomatte pass's are "RGBA"
+# each pass's channels: a Cryptomatte pass's are "RGBA", a light pass's (`light_passes`) "RGB"
+CHANNELS = {DEPTH: "Z", MIST: "Z", NORMAL: "XYZ", **{name: "RGB" for name in LIGHT_PASSES}}
 MIST_FALLOFFS = {"quadratic": 2.0, "linear": 1.0, "inverse_quadratic": 0.5}  # Blender's, as Cycles' exponents
 NO_HIT_DEPTH = 1e10
 CRYPTOMATTE_DEPTH_MAX = 16  # Blender's largest pass_cryptomatte_depth
@@ -102,7 +104,7 @@ def cryptomatte_passes(kind: str, depth: int) -> list[str]:
 
 
 def pass_channels(settings) -> dict:
-    """Every data pass `settings` asks for, by Blender name, with its channel letters (in order)."""
+    """Every data and light pass `settings` asks for, by Blender name, with its channel letters (in order)."""
     channels = {}
     for name in settings.passes:
         if name in CHANNELS:
@@ -124,7 +126,7 @@ def render_passes(scene, kernel_scene: KernelScene, spp: int, seed: int, backend
     """The data passes `scene.settings.passes` asks for (module docstring), from spp first hits per pixel, in
     chunks of rows and samples of about FIRST_HIT_BYTES (Cryptomatte's per-name counts included)."""
     settings = scene.settings
-    wanted = set(settings.passes)
+    wanted = set(settings.passes) & set(DATA_PASSES)
     if not wanted:
         return PassImages({}, {})
     find = first_hit_function(backend)
@@ -229,12 +231,14 @@ def _in_passes(kind: str, levels: np.ndarray) -> dict:
 
 
 def check_passes(settings, where: str = "render") -> None:
-    """The data passes' part of `check_settings`: known names, a mist range, a Cryptomatte depth."""
+    """The passes' part of `check_settings`: known names (data and light passes), a mist range, a Cryptomatte
+    depth."""
     if not isinstance(settings.passes, (tuple, list)):
         raise SpectralError(f"{where}.passes: expected a list of pass names, found {checks.shown(settings.passes)}")
+    known = (*DATA_PASSES, *LIGHT_PASSES)
     for i, name in enumerate(settings.passes):
-        if name not in DATA_PASSES:
-            raise SpectralError(f"{where}.passes[{i}]: unknown pass {name!r}: choose from {', '.join(DATA_PASSES)}")
+        if name not in known:
+            raise SpectralError(f"{where}.passes[{i}]: unknown pass {name!r}: choose from {', '.join(known)}")
     checks.number(settings.mist_start, f"{where}.mist_start")
     if checks.number(settings.mist_depth, f"{where}.mist_depth") <= 0:
         raise SpectralError(f"{where}.mist_depth: must be above 0, found {settings.mist_depth}")

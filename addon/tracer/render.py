@@ -18,7 +18,8 @@ import numpy as np
 
 from . import adaptive, backends, sampling
 from .backends import tile_arguments
-from .passes import PassImages, render_passes
+from .light_passes import light_categories, light_images
+from .passes import DATA_PASSES, PassImages, render_passes
 from .errors import SpectralError
 from .film import Film
 from .kernels.layout import KernelScene
@@ -39,13 +40,15 @@ def band_scenes(scene: Scene, kernel_scene: KernelScene | None = None) -> list[K
 
 
 def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
-                seed: int, backend: str = "numba", spectrum: bool = False) -> tuple[np.ndarray, ...]:
+                seed: int, backend: str = "numba", light_categories: int = 0,
+                spectrum: bool = False) -> tuple[np.ndarray, ...]:
     """Σ XYZ, Σ XYZ² and Σ transparency over samples [begin, end) of each pixel in tile (x0, y0, width,
-    height), and with `spectrum` the Σ of each spectral bin's estimate (height, width, bins) after them (the
-    scene's bins, `kernel_scene.wavelengths.spectrum_edges`; without, the kernel adds none)."""
-    arguments = tile_arguments(kernel_scene, band, samples, tile, seed, spectrum)
+    height), then Σ XYZ of each of `light_categories` light categories (`light_passes.light_categories`; none
+    when 0) and, with `spectrum`, the Σ of each spectral bin's estimate (height, width, bins; the scene's bins,
+    `kernel_scene.wavelengths.spectrum_edges`; none without)."""
+    arguments = tile_arguments(kernel_scene, band, samples, tile, seed, light_categories, spectrum)
     backends.named(backend).kernels.render_tile(*arguments)
-    return arguments[-4:] if spectrum else arguments[-4:-1]
+    return arguments[-5:]
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
@@ -139,7 +142,8 @@ class RenderResult:
     cancelled: bool = False
     seconds: float = 0.0
     stats: dict = field(default_factory=dict)
-    passes: PassImages = field(default_factory=lambda: PassImages({}, {}))  # the data passes the scene asks for (`passes`), once rendered
+    # the data and light passes the scene asks for (`passes`, `light_passes`), once rendered
+    passes: PassImages = field(default_factory=lambda: PassImages({}, {}))
 
 
 def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, backend: str | None = None,
@@ -161,7 +165,8 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     start = time.perf_counter()
     bands = band_scenes(scene)
     camera = scene.camera
-    film = Film(camera.width, camera.height, len(bands), bands[0].wavelengths.spectrum_edges)
+    categories = light_categories(settings)
+    film = Film(camera.width, camera.height, len(bands), categories, bands[0].wavelengths.spectrum_edges)
     total = camera.width * camera.height * spp * len(bands)
     done = 0
     cancelled = not chosen.prepare(bands[0], seed, cancel, notice)
@@ -173,20 +178,22 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
             break
         with KERNEL_LAUNCH:
             unit_start = time.perf_counter()
-            sums = render_unit(bands[band], band, samples, tile, seed, backend, film.bins > 0)
+            sums = render_unit(bands[band], band, samples, tile, seed, backend, categories, film.bins > 0)
             unit_seconds_taken = time.perf_counter() - unit_start
         size = samples[1] - samples[0]
         tiler.measured(tile, size, unit_seconds_taken)
-        film.add(band, tile[1], tile[0], sums[0], sums[1], size, *sums[2:])
+        film.add(band, tile[1], tile[0], *sums[:2], size, *sums[2:])
         done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)
     data_passes = PassImages({}, {})
-    if settings.passes and not cancelled:
+    wants_data = any(name in DATA_PASSES for name in settings.passes)
+    if wants_data and not cancelled:
         cancelled = not chosen.prepare_first_hits(bands[0], cancel, notice)
-    if settings.passes and not cancelled:
+    if wants_data and not cancelled:
         with KERNEL_LAUNCH:
             data_passes = render_passes(scene, bands[0], spp, seed, backend)
+    data_passes.images.update(light_images(film, settings))
     seconds = time.perf_counter() - start
     return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend),
                         passes=data_passes)

@@ -249,8 +249,10 @@ class RenderSettings:
     # Film ▸ Transparent: camera rays that reach the background (the infinite lights) see none of it, and the
     # film's alpha is 1 − the share they saw; the infinite lights still light the scene.
     transparent: bool = False
-    # Data passes written beside the image (`passes.DATA_PASSES`: Depth, Mist, Normal, CryptoObject,
-    # CryptoMaterial), with World ▸ Mist Pass's start, depth and falloff and Cryptomatte's levels.
+    # Passes written beside the image: data passes (`passes.DATA_PASSES`: Depth, Mist, Normal, CryptoObject,
+    # CryptoMaterial) and light passes (`light_passes.LIGHT_PASSES`: Emission, Environment, Volume Direct,
+    # Volume Indirect), with
+    # World ▸ Mist Pass's start, depth and falloff and Cryptomatte's levels.
     passes: tuple[str, ...] = ()
     mist_start: float = 5.0
     mist_depth: float = 25.0
@@ -262,6 +264,10 @@ class RenderSettings:
     spectrum_start: float = 380.0
     spectrum_end: float = 780.0
     spectrum_step: float = 10.0
+    # Light Paths ▸ Clamping (`kernels/light_split.py`): the most light a sample's direct and indirect parts may
+    # bring, in linear Rec.709 (0: no clamping, the default here: unbiased; Blender's are 0 and 10).
+    clamp_direct: float = 0.0
+    clamp_indirect: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)

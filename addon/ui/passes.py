@@ -4,11 +4,13 @@ offered (Blender's generic pass panels name only EEVEE and Workbench in their CO
 
 import bpy
 
-from ..export.passes import TOGGLES
+from ..export.passes import LIGHT_TOGGLES, TOGGLES
+from ..tracer.light_passes import EMIT, ENV, VOLUME_DIR, VOLUME_IND
 from ..tracer.passes import CRYPTO_MATERIAL, CRYPTO_OBJECT, DEPTH, MIST, NORMAL
 from .panel import SpectralPanel
 
-LABELS = {DEPTH: "Z", MIST: "Mist", NORMAL: "Normal", CRYPTO_OBJECT: "Object", CRYPTO_MATERIAL: "Material"}
+LABELS = {DEPTH: "Z", MIST: "Mist", NORMAL: "Normal", CRYPTO_OBJECT: "Object", CRYPTO_MATERIAL: "Material",
+          EMIT: "Emission", ENV: "Environment", VOLUME_DIR: "Volume Direct", VOLUME_IND: "Volume Indirect"}
 
 
 class SPECTRAL_PT_view_layer_passes(SpectralPanel, bpy.types.Panel):
@@ -25,6 +27,11 @@ class SPECTRAL_PT_view_layer_passes(SpectralPanel, bpy.types.Panel):
         column = layout.column(heading="Data", align=True)
         for name in (DEPTH, MIST, NORMAL):
             column.prop(view_layer, TOGGLES[name], text=LABELS[name])
+        column = layout.column(heading="Light", align=True)
+        for name, (owner, toggle) in LIGHT_TOGGLES.items():
+            settings = getattr(view_layer, owner, None) if owner else view_layer
+            if settings is not None:  # Cycles' toggles exist where the Cycles add-on is enabled
+                column.prop(settings, toggle, text=LABELS[name])
         column = layout.column(heading="Cryptomatte", align=True)
         for name in (CRYPTO_OBJECT, CRYPTO_MATERIAL):
             column.prop(view_layer, TOGGLES[name], text=LABELS[name])

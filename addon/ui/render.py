@@ -112,6 +112,19 @@ class SPECTRAL_PT_render_performance(RenderPanel, bpy.types.Panel):
         layout.prop(settings, "scheduler_address")
 
 
+class SPECTRAL_PT_render_clamping(RenderPanel, bpy.types.Panel):
+    bl_label = "Clamping"
+    bl_idname = "SPECTRAL_PT_render_clamping"
+    bl_parent_id = "SPECTRAL_PT_render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw_settings(self, layout, context):
+        settings = context.scene.spectral
+        column = layout.column(align=True)
+        column.prop(settings, "clamp_direct")
+        column.prop(settings, "clamp_indirect")
+
+
 class SPECTRAL_PT_object(SpectralPanel, bpy.types.Panel):
     bl_label = "Spectral Volume"
     bl_idname = "SPECTRAL_PT_object"
@@ -128,4 +141,5 @@ class SPECTRAL_PT_object(SpectralPanel, bpy.types.Panel):
         draw_object(layout, context.object)
 
 
-CLASSES = (SPECTRAL_PT_render, SPECTRAL_PT_render_wavelengths, SPECTRAL_PT_render_performance, SPECTRAL_PT_object)
+CLASSES = (SPECTRAL_PT_render, SPECTRAL_PT_render_wavelengths, SPECTRAL_PT_render_clamping,
+           SPECTRAL_PT_render_performance, SPECTRAL_PT_object)

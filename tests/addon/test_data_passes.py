@@ -67,7 +67,7 @@ def test_the_render_layer_offers_exactly_the_passes_the_view_layer_asks_for(regi
 
 def test_export_reads_the_view_layer_and_world_and_warns_of_unmade_passes(registered):
     scene, layer = surfaces_scene()
-    layer.use_pass_emit = layer.use_pass_ambient_occlusion = True
+    layer.use_pass_diffuse_direct = layer.use_pass_ambient_occlusion = True
     layer.aovs.add().name = "mask"
     export = export_scene(bpy.context.evaluated_depsgraph_get())
     settings = export.scene.settings
@@ -76,9 +76,9 @@ def test_export_reads_the_view_layer_and_world_and_warns_of_unmade_passes(regist
     assert settings.cryptomatte_depth == 4
     assert {(surface.object, surface.material) for surface in export.scene.surfaces} == {("Floor", "Grey"),
                                                                                         ("Box", "Red")}
-    assert unmade_passes(layer) == ["Emission", "Ambient Occlusion", "AOV 'mask'"]
+    assert unmade_passes(layer) == ["Diffuse Direct", "Ambient Occlusion", "AOV 'mask'"]
     warning = next(w for w in export.warnings if "not rendered by this engine" in w)
-    assert "Emission" in warning and "Ambient Occlusion" in warning and "AOV 'mask'" in warning
+    assert "Diffuse Direct" in warning and "Ambient Occlusion" in warning and "AOV 'mask'" in warning
 
 
 def _f12_exr(scene, path) -> dict:
@@ -142,7 +142,7 @@ def test_depth_mist_and_normal_agree_with_cycles(registered, tmp_path):
 def test_the_passes_panel_offers_only_the_passes_the_engine_makes(registered):
     from types import SimpleNamespace
 
-    from addon.export.passes import TOGGLES
+    from addon.export.passes import LIGHT_TOGGLES, TOGGLES
     from tests.addon.recording import draw
 
     scene, layer = surfaces_scene()
@@ -150,7 +150,8 @@ def test_the_passes_panel_offers_only_the_passes_the_engine_makes(registered):
     context = SimpleNamespace(scene=scene, engine=scene.render.engine, view_layer=layer, world=scene.world)
     layout = draw(bpy.types.SPECTRAL_PT_view_layer_passes, context)
     drawn = {args[1] for kind, args, _ in layout.calls if kind == "prop"}
-    assert drawn == {"use_pass_combined", "pass_cryptomatte_depth", *TOGGLES.values(),
+    light = {toggle for _, toggle in LIGHT_TOGGLES.values()}
+    assert drawn == {"use_pass_combined", "pass_cryptomatte_depth", *TOGGLES.values(), *light,
                      "spectral_exr", "spectral_exr_start", "spectral_exr_end", "spectral_exr_step"}
     mist = {args[1] for kind, args, _ in draw(bpy.types.SPECTRAL_PT_world_mist, context).calls if kind == "prop"}
     assert mist == {"start", "depth", "falloff"}
@@ -170,7 +171,7 @@ def test_a_farm_and_the_emulation_name_the_data_passes_they_leave_out(registered
     job = render_job(scene, export, scheduler="tcp://127.0.0.1:1" if renderer == "farm" else None)
     if renderer == "farm":
         assert job.scene.settings.passes == ()  # the farm is not asked for them (it would refuse)
-    warning = next(w for w in job.warnings if "does not render data passes" in w)
+    warning = next(w for w in job.warnings if "does not render data or light passes" in w)
     assert "Depth, Mist, Normal, CryptoObject, CryptoMaterial" in warning
 
 

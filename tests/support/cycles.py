@@ -1,11 +1,11 @@
 """Cycles as the control for the exporter: the same Blender scene rendered by Cycles (CPU, in the bpy
 module) and by the tracer through the add-on's export, compared on block means.
 
-Cycles renders unbiased (as the Cycles emulation sets it up: its biased volume mode and light threshold off,
-a 1-pixel box filter), with its volume bounces raised to the tracer's depth (its default, 0, is single
-scattering), denoising off, and its linear Rec.709 read from an EXR; the tracer's film gives linear Rec.709
-and per-pixel variances. Block differences are judged against both estimates' noise: Cycles' from two
-renders with different seeds."""
+Cycles renders as the Cycles emulation sets it up (its biased volume mode and light threshold off, a 1-pixel box
+filter), clamping as the engine's Light Paths ▸ Clamping says (Blender's defaults on both sides), with its volume
+bounces raised to the tracer's depth (its default, 0, is single scattering), denoising off, and its linear
+Rec.709 read from an EXR; the tracer's film gives linear Rec.709 and per-pixel variances. Block differences are
+judged against both estimates' noise: Cycles' from two renders with different seeds."""
 
 import math
 from pathlib import Path
@@ -32,7 +32,11 @@ def cycles_rgb(scene, folder: Path, spp: int, seed: int, bounces: int = 64, alph
     cycles.use_adaptive_sampling = False
     cycles.max_bounces = cycles.volume_bounces = cycles.transparent_max_bounces = bounces
     cycles.diffuse_bounces = cycles.glossy_bounces = cycles.transmission_bounces = bounces
-    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
+    # the engine's Light Paths ▸ Clamping (Blender's defaults: direct off, indirect 10), so both sides clamp alike;
+    # none where the add-on is not registered (tests of the tracer's own scenes, whose default is no clamping)
+    spectral = getattr(scene, "spectral", None)
+    cycles.sample_clamp_direct = spectral.clamp_direct if spectral is not None else 0.0
+    cycles.sample_clamp_indirect = spectral.clamp_indirect if spectral is not None else 0.0
     cycles.volume_biased, cycles.light_sampling_threshold, cycles.use_volume_guiding = False, 0.0, False
     cycles.pixel_filter_type, cycles.filter_width = "BOX", 1.0  # the tracer's pixel
     settings = scene.render.image_settings

@@ -173,8 +173,8 @@ def test_cli_writes_the_passes_with_blenders_names_and_cryptomatte_metadata(tmp_
 
 def test_cli_names_an_unknown_pass(tmp_path):
     folder = scene_io.save_scene(_scene(s.ortho_camera(4, 3), [_floor()], passes=()), tmp_path / "scene")
-    with pytest.raises(SpectralError, match="--passes: render.passes\\[0\\]: unknown pass 'Emission'"):
-        cli.with_passes(scene_io.load_scene(folder), "Emission")
+    with pytest.raises(SpectralError, match="--passes: render.passes\\[0\\]: unknown pass 'Shadow'"):
+        cli.with_passes(scene_io.load_scene(folder), "Shadow")
 
 
 def test_chunks_of_rows_and_samples_give_the_same_passes(monkeypatch):

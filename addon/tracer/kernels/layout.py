@@ -195,10 +195,15 @@ class KernelWavelengths(NamedTuple):
 
 
 class KernelTermination(NamedTuple):
-    """When a path ends: its greatest depth and the depth from which it plays Russian roulette."""
+    """When a path ends: its greatest depth and the depth from which it plays Russian roulette; and how much
+    light one sample may bring (Light Paths ▸ Clamping, `light_split`: each part's limit, 0 for none, and the
+    XYZ → linear Rec.709 matrix the limits are measured in)."""
 
     max_depth: int
     rr_depth: int
+    clamp_direct: float
+    clamp_indirect: float
+    xyz_to_rgb: np.ndarray  # (3, 3)
 
 
 class KernelScene(NamedTuple):

@@ -83,6 +83,9 @@ from .light_sampling import (
     is_delta,
     sample_light,
 )
+from .light_split import (
+    AFTER_NEE, BACKGROUND, EMISSION, ENVIRONMENT, FIRST, MARKS, MEDIUM, NOTHING, SECOND, SURFACE, clamp_factor,
+    clamped_mark, direct_slot)
 from .lookups import on_grid, table_at
 from .media import (
     albedo,
@@ -589,8 +592,9 @@ def _sample_lambert(n, path, hit):
 # samples): the stream of random numbers (`_next`), camera wavelengths and their pdfs, current
 # wavelengths (the hero changes at fluorescence), the media's spectra at them (`_fill_spectral_cache`),
 # throughput, the MIS pdf ratios of unidirectional and light sampling, the radiance collected, and the camera
-# path's transparency (one value: `_see_through`).
-Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance transparent")
+# path's transparency (one value: `_see_through`); for light passes and clamping, the camera path's marks of its
+# radiance and what it met first and how many marks it has taken (`light_split`).
+Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance transparent marks first")
 # Medium coefficients at a point (`_coefficients`): per wavelength summed over media, and per medium;
 # `dye` holds the dyes' absorption at their mean excitation (`fluorescent_reservoir`'s optical depth).
 Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s medium_fl dye")
@@ -614,7 +618,8 @@ Hit = namedtuple("Hit", "nodes entries normal reflectance")
 def _new_path(media):
     return Path(np.zeros(4, dtype=np.uint64), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
                 np.empty((media, SPEC_ROWS, MAX_LAMBDAS)), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
-                np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.zeros(1))
+                np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.zeros(1), np.zeros((MARKS, MAX_LAMBDAS)),
+                np.zeros(2, dtype=np.int64))
 
 
 @jit(inline="always")
@@ -685,11 +690,18 @@ def _see_through(ks, n, path):
 @jit(inline="always")
 def _path_xyz(ks, n, path):
     """The path's XYZ estimate: each camera wavelength's radiance over its pdf, through the XYZ weights."""
+    return _spectrum_xyz(ks, n, path, -1)
+
+
+@jit(inline="always")
+def _spectrum_xyz(ks, n, path, mark):
+    """XYZ of the path's radiance (`mark` −1) or of one of its marks (`light_split`), as `_path_xyz` weighs it."""
     x, y, z = 0.0, 0.0, 0.0
     for i in range(n):
-        if path.radiance[i] == 0.0 or path.pdf_cam[i] <= 0.0:
+        value = path.radiance[i] if mark < 0 else path.marks[mark, i]
+        if value == 0.0 or path.pdf_cam[i] <= 0.0:
             continue
-        scale = path.radiance[i] / (path.pdf_cam[i] * n)
+        scale = value / (path.pdf_cam[i] * n)
         at = on_grid(path.lam_cam[i])
         x += scale * table_at(ks.wavelengths.xyz_weights, 0, at)
         y += scale * table_at(ks.wavelengths.xyz_weights, 1, at)
@@ -709,6 +721,67 @@ def _path_spectrum(ks, n, path, sum_spectrum, row, column):
         b = int(spectrum_bin(edges, path.lam_cam[i]))
         if b >= 0:
             sum_spectrum[row, column, b] += spectrum_weight(edges, path.radiance[i], path.pdf_cam[i], n)
+def _mark(n, path, index):
+    """Take the camera path's mark `index` of its radiance (`light_split`): the next one it takes."""
+    for i in range(n):
+        path.marks[index, i] = path.radiance[i]
+    path.first[1] = index + 1
+
+
+@jit(inline="always")
+def _mark_vertex(n, path, on_surface):
+    """The camera path reaches a vertex: its first (what it is, and the mark), or its second (the mark)."""
+    if path.first[1] == FIRST:
+        path.first[0] = SURFACE if on_surface else MEDIUM
+        _mark(n, path, FIRST)
+    elif path.first[1] == SECOND:
+        _mark(n, path, SECOND)
+
+
+@jit(inline="always")
+def _mark_fluorescence(path, i, depth, contribution):
+    """A fluorescent sub-path from a collision at vertex `depth` adds `contribution` at camera wavelength i: as a
+    medium's emission there, to the marks taken after it (`light_split`)."""
+    if depth == 1:
+        for index in range(MARKS):
+            path.marks[index, i] += contribution
+    elif depth == 2:
+        path.marks[SECOND, i] += contribution
+
+
+@jit(inline="always")
+def _split_light(ks, n, path, x, y, z, light_sums):
+    """The camera path's XYZ (x, y, z) clamped (Light Paths ▸ Clamping, `light_split`), and split by its marks into
+    the light categories, added to `light_sums` (slots × XYZ; none: no light passes). Returns the clamped XYZ."""
+    x0, y0, z0 = _spectrum_xyz(ks, n, path, FIRST)
+    x1, y1, z1 = _spectrum_xyz(ks, n, path, AFTER_NEE)
+    x2, y2, z2 = _spectrum_xyz(ks, n, path, SECOND)
+    term = ks.termination
+    direct = clamp_factor(x1, y1, z1, term.xyz_to_rgb, term.clamp_direct)
+    indirect = clamp_factor(x - x1, y - y1, z - z1, term.xyz_to_rgb, term.clamp_indirect)
+    if direct < 1.0 or indirect < 1.0:  # else the image stays exactly as unclamped
+        x, y, z = (clamped_mark(x, x1, direct, indirect), clamped_mark(y, y1, direct, indirect),
+                   clamped_mark(z, z1, direct, indirect))
+        x2, y2, z2 = (clamped_mark(x2, x1, direct, indirect), clamped_mark(y2, y1, direct, indirect),
+                      clamped_mark(z2, z1, direct, indirect))
+        x0, y0, z0 = direct * x0, direct * y0, direct * z0
+    if light_sums.shape[0] > 0:
+        light_sums[EMISSION, 0] += x0
+        light_sums[EMISSION, 1] += y0
+        light_sums[EMISSION, 2] += z0
+        if path.first[0] == BACKGROUND:
+            light_sums[ENVIRONMENT, 0] += x - x0
+            light_sums[ENVIRONMENT, 1] += y - y0
+            light_sums[ENVIRONMENT, 2] += z - z0
+        else:
+            slot = direct_slot(path.first[0])
+            light_sums[slot, 0] += x2 - x0
+            light_sums[slot, 1] += y2 - y0
+            light_sums[slot, 2] += z2 - z0
+            light_sums[slot + 1, 0] += x - x2
+            light_sums[slot + 1, 1] += y - y2
+            light_sums[slot + 1, 2] += z - z2
+    return x, y, z
 
 
 # ----------------------------------------------------------------------------- transport
@@ -1057,19 +1130,24 @@ def _survives_roulette(ks, depth, n, path):
 
 
 @jit(inline="always")
-def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, light, tracker, fl, hit):
+def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, vertex, light, tracker, fl, hit):
     """Transport from a camera ray, or (`emitted`) from an isotropic fluorescent emission at (ox, oy, oz)
     at vertex `depth`: collects the radiance per wavelength in `path.radiance` and offers fluorescent
-    sources to `fl`. A vertex is a real collision in a medium or a surface the path reaches (`on_surface`)."""
+    sources to `fl`. A vertex is a real collision in a medium or a surface the path reaches (`on_surface`).
+    With `marking` (a camera path, for light passes or clamping), the path takes its marks (`light_split`)."""
     grey = _is_grey(ks, n, path.spec)
     scattered = emitted
     at_vertex = emitted
     on_surface = False
     while True:
         if at_vertex:
+            if marking:
+                _mark_vertex(n, path, on_surface)
             if ks.lights.kind.shape[0] > 0:
                 _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, on_surface, grey, n, path, vertex, light, tracker,
                             hit)
+            if marking and path.first[1] == AFTER_NEE:
+                _mark(n, path, AFTER_NEE)
             if on_surface:
                 dx, dy, dz = _sample_lambert(n, path, hit)
             else:
@@ -1089,6 +1167,9 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, ligh
         if event == EVENT_ESCAPE:
             survival = math.exp(-_control_depth(ks, tracker, path.spec, 0)) if controls else 1.0
             if triangle < 0:
+                if marking and not scattered:
+                    path.first[0] = BACKGROUND
+                    _mark(n, path, FIRST)
                 _escape(ks, dx, dy, dz, scattered, survival, n, path, light)
                 return
             if not scattered and ks.surfaces.holdout[ks.surfaces.surface[triangle]]:
@@ -1114,19 +1195,28 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, n, path, vertex, ligh
 
 
 @jit(inline="always")
-def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl, hit):
+def _trace(ks, ox, oy, oz, dx, dy, dz, splitting, n, path, vertex, light, tracker, fl, hit):
     """Transport of one path from a camera ray, then of its fluorescent sub-paths one after another, all
     through the one `_transport` below (inlined once, not once per kind of path): collects the path's
-    radiance per camera wavelength in `path.radiance`."""
+    radiance per camera wavelength in `path.radiance`. With `splitting`, the camera path takes its marks
+    (`light_split`; marks it never reached are its radiance) and the sub-paths add to them."""
     for j in range(RESERVOIRS):
         fl.total[j] = 0.0
+    path.first[0], path.first[1] = NOTHING, FIRST
     depth, emitted, count = 0, False, n
     while True:
-        _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, count, path, vertex, light, tracker, fl, hit)
+        _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, splitting and not emitted, count, path, vertex, light,
+                   tracker, fl, hit)
+        if splitting and not emitted:
+            for index in range(path.first[1], MARKS):
+                _mark(n, path, index)
         k, weight = _chosen_source(path, fl)
         for i in range(n):
             if emitted:  # a sub-path: its radiance at λ_in, then the weight of the next one
-                fl.radiance[i] += fl.scale[i] * path.radiance[0]
+                contribution = fl.scale[i] * path.radiance[0]
+                fl.radiance[i] += contribution
+                if splitting:
+                    _mark_fluorescence(path, i, depth, contribution)
                 fl.scale[i] *= weight
             else:  # the camera path
                 fl.radiance[i] = path.radiance[i]
@@ -1142,10 +1232,10 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl, hit)
 
 @jit
 def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
-                   sum_transparent, sum_spectrum):
+                   sum_transparent, sum_light_passes, sum_spectrum):
     """Samples [sample_begin, sample_end) of the tile's pixels [first, last) (row-major), added to `sum_xyz`,
-    `sum_sq`, `sum_transparent` and `sum_spectrum`. The path's buffers are made once for them all: each allocation
-    updates Numba's global allocation counters atomically, which threads contend for."""
+    `sum_sq`, `sum_transparent`, `sum_light_passes` and `sum_spectrum`. The path's buffers are made once for them
+    all: each allocation updates Numba's global allocation counters atomically, which threads contend for."""
     media = max(ks.media.density_scale.shape[0], 1)
     path, vertex = _new_path(media), _new_coefficients(media)
     light, tracker, fl, hit = _new_light_sample(), _new_tracker(media), _new_fluorescent(), _new_hit()
@@ -1154,7 +1244,7 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
         px, py = x0 + column, y0 + row
         sx, sy, sz, qx, qy, qz, st = _render_samples(ks, px, py, py * ks.camera.width + px, sample_begin, sample_end,
                                                      seed, band, path, vertex, light, tracker, fl, hit,
-                                                     sum_spectrum, row, column)
+                                                     sum_light_passes[row, column], sum_spectrum, row, column)
         sum_xyz[row, column, 0] += sx
         sum_xyz[row, column, 1] += sy
         sum_xyz[row, column, 2] += sz
@@ -1166,14 +1256,19 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
 
 @jit
 def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, light, tracker, fl, hit,
-                    sum_spectrum, row, column):
+                    light_sums, sum_spectrum, row, column):
     """Samples [sample_begin, sample_end) of one pixel, (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z², Σ transparency), in the
-    path's buffers (`_render_pixels` makes them); each sample's spectrum is added to `sum_spectrum[row, column]`.
-    The scene and the buffers, which the caller keeps alive, are borrowed (`_borrowed`): the loop below then updates
-    no reference counts."""
+    path's buffers (`_render_pixels` makes them); the light categories' Σ XYZ added to `light_sums` (slots × 3,
+    none without light passes) and each sample's spectrum to `sum_spectrum[row, column]` (unclamped). The scene and
+    the buffers, which the caller keeps alive, are borrowed (`_borrowed`): the loop below then updates no reference
+    counts."""
     ks, path, vertex, light, tracker, fl, hit = (_borrowed(ks), _borrowed(path), _borrowed(vertex), _borrowed(light),
                                                  _borrowed(tracker), _borrowed(fl), _borrowed(hit))
+    light_sums = _borrowed(light_sums)
     n = ks.wavelengths.per_path
+    # light passes or clamping: the camera paths take their marks (`light_split`); else no extra work
+    term = ks.termination
+    splitting = light_sums.shape[0] > 0 or term.clamp_direct > 0.0 or term.clamp_indirect > 0.0
     path.stream[2] = pixel_key(seed, band, pixel)
     sx, sy, sz, qx, qy, qz, st = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for sample in range(sample_begin, sample_end):
@@ -1182,9 +1277,11 @@ def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, pat
         path.stream[3] = sample
         _sample_wavelengths(ks, n, path)
         ox, oy, oz, dx, dy, dz = camera_ray(ks, px, py, _next(path.stream), _next(path.stream))
-        _trace(ks, ox, oy, oz, dx, dy, dz, n, path, vertex, light, tracker, fl, hit)
+        _trace(ks, ox, oy, oz, dx, dy, dz, splitting, n, path, vertex, light, tracker, fl, hit)
         x, y, z = _path_xyz(ks, n, path)
         _path_spectrum(ks, n, path, sum_spectrum, row, column)
+        if splitting:
+            x, y, z = _split_light(ks, n, path, x, y, z, light_sums)
         sx, sy, sz = sx + x, sy + y, sz + z
         qx, qy, qz = qx + x * x, qy + y * y, qz + z * z
         st += path.transparent[0]
@@ -1199,21 +1296,22 @@ PIXEL_CHUNKS = 64
 @cached
 @jit(nogil=True)
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
-                sum_transparent, sum_spectrum):
+                sum_transparent, sum_light_passes, sum_spectrum):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel),
-    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`) and
-    `sum_spectrum` (shape (tile_height, tile_width, B): Σ of each bin's estimate, `kernels/spectrum_bins.py`;
-    B = 0: none)."""
+    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`),
+    `sum_light_passes` (shape (tile_height, tile_width, K, 3): Σ XYZ of each light category, `light_split`; K is
+    `light_split.CATEGORIES`, or 0 for none) and `sum_spectrum` (shape (tile_height, tile_width, B): Σ of each bin's
+    estimate, `kernels/spectrum_bins.py`; B = 0: none)."""
     _render_runs(ks.camera, ks.density, ks.majorant, ks.temperature, ks.glow, ks.media, ks.fluorescence, ks.lights,
                  ks.envmaps, ks.surfaces, ks.wavelengths, ks.termination, x0, y0, tile_width, tile_height, sample_begin,
-                 sample_end, seed, band, sum_xyz, sum_sq, sum_transparent, sum_spectrum)
+                 sample_end, seed, band, sum_xyz, sum_sq, sum_transparent, sum_light_passes, sum_spectrum)
 
 
 @jit(parallel=True, nogil=True)
 def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
                  wavelengths, termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
-                 sum_xyz, sum_sq, sum_transparent, sum_spectrum):
+                 sum_xyz, sum_sq, sum_transparent, sum_light_passes, sum_spectrum):
     """`render_tile`'s runs of pixels, in parallel. The kernel scene comes as its groups, and each run puts
     them together again: Numba's parallel loop hands a tuple to its threads member by member, which fails
     when a member is a tuple itself."""
@@ -1223,7 +1321,7 @@ def _render_runs(camera, density, majorant, temperature, glow, media, fluorescen
         ks = KernelScene(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
                          wavelengths, termination)
         _render_pixels(ks, x0, y0, tile_width, chunk * pixels // chunks, (chunk + 1) * pixels // chunks, sample_begin,
-                       sample_end, seed, band, sum_xyz, sum_sq, sum_transparent, sum_spectrum)
+                       sample_end, seed, band, sum_xyz, sum_sq, sum_transparent, sum_light_passes, sum_spectrum)
 
 
 def set_threads(count: int) -> None:

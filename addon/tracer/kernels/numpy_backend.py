@@ -43,6 +43,9 @@ from .layout import (
 from .light_sampling import (
     area_direction_pdf, area_light_hit, area_radiance, choose_light, incident_radiance, infinite_pdf,
     infinite_radiance, is_delta, sample_light)
+from .light_split import (
+    AFTER_NEE, BACKGROUND, CATEGORIES, EMISSION, ENVIRONMENT, FIRST, MARKS, MEDIUM, SECOND, SURFACE, clamp_factor,
+    clamped_mark, direct_slot)
 from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 from .spectrum_bins import spectrum_bin, spectrum_weight
@@ -776,19 +779,59 @@ def _roulette(ks, paths):
     return keep
 
 
-def _scatter(ks, paths, vertex, isotropic, radiance):
+def _scatter(ks, paths, vertex, isotropic, radiance, marks=None):
     """Next-event estimation and phase sampling at every path's vertex (isotropic where `isotropic`), then
-    Russian roulette; returns the paths still alive."""
+    Russian roulette; returns the paths still alive. With `marks` (camera paths, `_Marks`), the paths at their
+    first vertex take their mark after next-event estimation."""
     if ks.lights.kind.shape[0] > 0:
         _next_event(ks, paths, vertex, isotropic, radiance)
+    if marks is not None:
+        marks.take(paths.id[marks.taken[paths.id] == AFTER_NEE], AFTER_NEE, radiance)
     keep = _sample_phase(ks, paths, vertex, isotropic)
     paths = paths.take(keep)
     return paths.take(_roulette(ks, paths))
 
 
-def _bounce(ks, paths, radiance, fl, transparent):
+class _Marks:
+    """The camera paths' marks of their radiance (`light_split`), by path id: the marks (paths, MARKS, n), how
+    many each has taken, and what each met first (the Numba kernel's `Path.marks` and `Path.first`)."""
+
+    def __init__(self, count, n):
+        self.values = np.zeros((count, MARKS, n))
+        self.taken = np.zeros(count, dtype=np.int64)
+        self.first = np.zeros(count, dtype=np.int64)
+
+    def take(self, ids, index, radiance):
+        """Paths `ids` take their mark `index`: their radiance now."""
+        self.values[ids, index] = radiance[ids]
+        self.taken[ids] = index + 1
+
+    def at_vertex(self, paths, radiance):
+        """The paths reach a vertex: their first (what it is, and the mark), or their second (the mark)."""
+        taken = self.taken[paths.id]
+        first = paths.id[taken == FIRST]
+        self.first[first] = np.where(paths.on_surface[taken == FIRST], SURFACE, MEDIUM)
+        self.take(first, FIRST, radiance)
+        self.take(paths.id[taken == SECOND], SECOND, radiance)
+
+    def finish(self, radiance):
+        """Marks a path never reached are its radiance."""
+        for index in range(MARKS):
+            ids = np.flatnonzero(self.taken <= index)
+            self.values[ids, index] = radiance[ids]
+        self.taken[:] = MARKS
+
+    def add_fluorescence(self, ids, depth, contribution):
+        """Sub-paths from collisions at vertex `depth` (of paths `ids`) add `contribution` (rows, n): as a medium's
+        emission there, to the marks taken after it."""
+        self.values[ids[depth == 1]] += contribution[depth == 1][:, None, :]
+        self.values[ids[depth == 2], SECOND] += contribution[depth == 2]
+
+
+def _bounce(ks, paths, radiance, fl, transparent, marks=None):
     """Every live path to its next scattering vertex (in a medium or on a surface) and past it; returns the
-    paths still alive. Camera paths that see through add to `transparent` (`_holes`)."""
+    paths still alive. Camera paths that see through add to `transparent` (`_holes`); with `marks`, they take
+    their marks (`_Marks`)."""
     t_hit, triangle = _closest_hits(ks, paths.o, paths.d, INF)
     vertex = _free_flight(ks, paths, radiance, fl, t_hit)
     escaped = vertex.event == EVENT_ESCAPE
@@ -798,6 +841,10 @@ def _bounce(ks, paths, radiance, fl, transparent):
         _see_through(ks, paths.take(holes), transparent)
         sky, surface = sky & ~holes, surface & ~holes
     if sky.any():
+        if marks is not None:
+            background = paths.id[sky & ~paths.scattered]
+            marks.first[background] = BACKGROUND
+            marks.take(background, FIRST, radiance)
         _escape(ks, paths.take(sky), radiance, vertex.survival[sky])
     if surface.any():
         _surface_emission(ks, paths.take(surface), triangle[surface], t_hit[surface], vertex.survival[surface],
@@ -819,7 +866,9 @@ def _bounce(ks, paths, radiance, fl, transparent):
     if not len(paths):
         return paths
     paths.depth += 1
-    return _scatter(ks, paths, vertex, np.zeros(len(paths), dtype=bool), radiance)
+    if marks is not None:
+        marks.at_vertex(paths, radiance)
+    return _scatter(ks, paths, vertex, np.zeros(len(paths), dtype=bool), radiance, marks)
 
 
 def _choose_sources(stream, fl, ids, reservoir, weight):
@@ -855,10 +904,11 @@ def _fluorescent_paths(ks, stream, ids, reservoir, fl):
     return paths
 
 
-def _trace(ks, px, py, pixel_keys, samples):
-    """XYZ estimates (paths, 3), transparencies (paths,) and spectral estimates (`_path_spectrum`) of one camera
-    path per sample, through pixels (px, py) keyed `pixel_keys`: the camera paths, then rounds of fluorescent
-    sub-paths (the Numba kernel's `_trace`)."""
+def _trace(ks, px, py, pixel_keys, samples, light_passes=False):
+    """XYZ estimates (paths, 3) and transparencies (paths,) of one camera path per sample, through pixels
+    (px, py) keyed `pixel_keys`: the camera paths, then rounds of fluorescent sub-paths (the Numba kernel's
+    `_trace`); with `light_passes` each path's light categories' XYZ (paths, CATEGORIES, 3), else None; and the
+    spectral estimates (`_path_spectrum`, unclamped). The XYZ are clamped where the scene clamps (`_split_light`)."""
     paths, lam_cam, pdf_cam = _camera_paths(ks, px, py, pixel_keys, samples)
     count, n = lam_cam.shape
     stream = paths.stream
@@ -867,14 +917,19 @@ def _trace(ks, px, py, pixel_keys, samples):
                 depth=np.zeros((count, RESERVOIRS), dtype=np.int64), tau_at=np.zeros((count, RESERVOIRS)),
                 tau=np.zeros(count))
     radiance, transparent = np.zeros((count, n)), np.zeros(count)
+    term = ks.termination
+    marks = _Marks(count, n) if light_passes or term.clamp_direct > 0.0 or term.clamp_indirect > 0.0 else None
     while len(paths):
-        paths = _bounce(ks, paths, radiance, fl, transparent)
+        paths = _bounce(ks, paths, radiance, fl, transparent, marks)
+    if marks is not None:
+        marks.finish(radiance)
     everyone = np.arange(count)
     reservoir, weight = np.zeros(count, dtype=np.int64), np.zeros(count)
     _choose_sources(stream, fl, everyone, reservoir, weight)
     scale = weight[:, None] * fl.share[everyone, reservoir]
     ids = np.flatnonzero((weight > 0.0) & (fl.depth[everyone, reservoir] <= ks.termination.max_depth))
     while ids.size:
+        depth = fl.depth[ids, reservoir[ids]]
         paths = _fluorescent_paths(ks, stream, ids, reservoir, fl)
         emitted = np.zeros((count, 1))
         paths = _scatter(ks, paths, _Batch(medium_s=np.zeros((ids.size, ks.media.density_scale.shape[0], 1))),
@@ -882,17 +937,30 @@ def _trace(ks, px, py, pixel_keys, samples):
         while len(paths):
             paths = _bounce(ks, paths, emitted, fl, transparent)
         radiance[ids] += scale[ids] * emitted[ids]
+        if marks is not None:
+            marks.add_fluorescence(ids, depth, scale[ids] * emitted[ids])
         _choose_sources(stream, fl, ids, reservoir, weight)
         scale[ids] *= weight[ids, None]
         ids = ids[(weight[ids] > 0.0) & (fl.depth[ids, reservoir[ids]] <= ks.termination.max_depth)]
-    xyz = np.zeros((samples.shape[0], 3))
+    xyz, spectrum = _xyz(ks, lam_cam, pdf_cam, radiance), _path_spectrum(ks, lam_cam, pdf_cam, radiance)
+    if marks is None:
+        return xyz, transparent, None, spectrum
+    xyz, light = _split_light(ks, marks, lam_cam, pdf_cam, xyz, light_passes)
+    return xyz, transparent, light, spectrum
+
+
+def _xyz(ks, lam_cam, pdf_cam, radiance):
+    """XYZ (paths, 3) of each path's radiance (paths, n): each camera wavelength's over its pdf, through the XYZ
+    weights."""
+    count, n = lam_cam.shape
+    xyz = np.zeros((count, 3))
     for i in range(n):
         counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
         scale_i = radiance[:, i] / (pdf_cam[:, i] * n)
         at = on_grid(lam_cam[:, i])
         for c in range(3):
             xyz[:, c] += np.where(counted, scale_i * table_at(ks.wavelengths.xyz_weights, c, at), 0.0)
-    return xyz, transparent, _path_spectrum(ks, lam_cam, pdf_cam, radiance)
+    return xyz
 
 
 def _path_spectrum(ks, lam_cam, pdf_cam, radiance):
@@ -905,13 +973,41 @@ def _path_spectrum(ks, lam_cam, pdf_cam, radiance):
     return bins, spectrum_weight(edges, radiance, pdf_cam, lam_cam.shape[1])
 
 
+def _split_light(ks, marks, lam_cam, pdf_cam, xyz, light_passes):
+    """The paths' XYZ clamped (Light Paths ▸ Clamping, `light_split`), and with `light_passes` split by their marks
+    into the light categories (paths, CATEGORIES, 3) (else None), as the Numba kernel's `_split_light`."""
+    first, after_nee, second = (_xyz(ks, lam_cam, pdf_cam, marks.values[:, index]) for index in (FIRST, AFTER_NEE,
+                                                                                               SECOND))
+    term = ks.termination
+    direct = clamp_factor(*after_nee.T, term.xyz_to_rgb, term.clamp_direct)[:, None]
+    indirect = clamp_factor(*(xyz - after_nee).T, term.xyz_to_rgb, term.clamp_indirect)[:, None]
+    clamped = ((direct < 1.0) | (indirect < 1.0))[:, 0]  # the other paths stay exactly as unclamped
+    xyz = np.where(clamped[:, None], clamped_mark(xyz, after_nee, direct, indirect), xyz)
+    second = np.where(clamped[:, None], clamped_mark(second, after_nee, direct, indirect), second)
+    first = np.where(clamped[:, None], direct * first, first)
+    if not light_passes:
+        return xyz, None
+    light = np.zeros((xyz.shape[0], CATEGORIES, 3))
+    rows = np.arange(xyz.shape[0])
+    light[:, EMISSION] = first
+    background = marks.first == BACKGROUND
+    light[background, ENVIRONMENT] = xyz[background] - first[background]
+    slot = direct_slot(marks.first)
+    vertex = ~background
+    light[rows[vertex], slot[vertex]] = second[vertex] - first[vertex]
+    light[rows[vertex], slot[vertex] + 1] = xyz[vertex] - second[vertex]
+    return xyz, light
+
+
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
-                sum_transparent, sum_spectrum):
+                sum_transparent, sum_light_passes, sum_spectrum):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
     `sum_xyz` and `sum_sq` (shape (tile_height, tile_width, 3): Σ XYZ and Σ XYZ² per pixel),
-    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`) and
-    `sum_spectrum` (shape (tile_height, tile_width, B): Σ of each bin's estimate, `kernels/spectrum_bins.py`;
-    B = 0: none)."""
+    `sum_transparent` (shape (tile_height, tile_width): Σ transparency, `kernels/transparency.py`),
+    `sum_light_passes` (shape (tile_height, tile_width, K, 3): Σ XYZ of each light category, `light_split`; K is
+    `light_split.CATEGORIES`, or 0 for none) and `sum_spectrum` (shape (tile_height, tile_width, B): Σ of each bin's
+    estimate, `kernels/spectrum_bins.py`; B = 0: none)."""
+    light_passes = sum_light_passes.shape[2] > 0
     samples = sample_end - sample_begin
     total = tile_width * tile_height * samples
     for start in range(0, total, CHUNK_PATHS):
@@ -921,8 +1017,11 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
         px, py = x0 + column, y0 + row
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             pixel_keys = pixel_key(seed, band, py * ks.camera.width + px)
-            xyz, transparent, spectrum = _trace(ks, px, py, pixel_keys, (sample_begin + sample).astype(np.uint64))
+            xyz, transparent, light, spectrum = _trace(ks, px, py, pixel_keys,
+                                                       (sample_begin + sample).astype(np.uint64), light_passes)
         np.add.at(sum_xyz, (row, column), xyz)
+        if light is not None:
+            np.add.at(sum_light_passes, (row, column), light)
         np.add.at(sum_sq, (row, column), xyz * xyz)
         np.add.at(sum_transparent, (row, column), transparent)
         if sum_spectrum.shape[2] and spectrum is not None:

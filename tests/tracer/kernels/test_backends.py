@@ -12,6 +12,7 @@ Images are tiny (8×8 pixels) and each film is rendered in one unit per band, so
 traces all of a film's paths as one wavefront.
 """
 
+import dataclasses
 import json
 import os
 import pickle
@@ -25,6 +26,7 @@ import pytest
 from addon.tracer import colorimetry, spectra
 from addon.tracer.lowering import compile_scene
 from addon.tracer.film import Film
+from addon.tracer.light_passes import light_categories
 from addon.tracer.kernels import numpy_backend
 from addon.tracer.render import band_scenes, render, render_unit
 from addon.tracer.scene import BlackbodyEmission, Fluorescence, Glow, Grid, Light, Medium
@@ -193,9 +195,33 @@ def transparent_holdout():
     return s.scene(s.perspective_camera(8, 8, fov_degrees=50.0), [medium], lights, [floor, hole], transparent=True)
 
 
+LIGHT_PASSES = ("Emission", "Environment", "Volume Direct", "Volume Indirect")
+
+
+def light_passes():
+    """Every light pass and clamping (both limits low enough to scale many samples) over a chromatic medium, a floor,
+    an emissive lamp the camera sees, a finite sun and an environment: the camera paths take their marks and split
+    their light (`kernels/light_split.py`)."""
+    medium = s.medium(s.box_grid(), extinction=s.smooth_ramp(1.5, 0.5), albedo=0.9, g=0.3)
+    floor = s.parallelogram((-3.0, -3.0, -0.4), (6.0, 0.0, 0.0), (0.0, 6.0, 0.0), 2, reflectance=0.6, name="floor")
+    lamp = s.parallelogram((-1.5, 1.5, 1.6), (1.5, 0.0, 0.0), (0.0, -3.0, 0.4), 1, reflectance=0.3,
+                           emission=s.smooth_ramp(1.0, 3.0), name="lamp")
+    lights = [s.sun([0.3, 0.2, 1.0], 2.0, angle=0.2), s.environment(0.4)]
+    return s.scene(s.perspective_camera(8, 8, fov_degrees=60.0), [medium], lights, [floor, lamp],
+                   passes=LIGHT_PASSES, clamp_direct=3.0, clamp_indirect=0.5)
+
+
+def fluorescent_light_passes():
+    """The fluorescent slab asking for every light pass: the sub-paths' light goes to the marks by the depth of
+    their collisions."""
+    return dataclasses.replace(fluorescence(), settings=dataclasses.replace(fluorescence().settings,
+                                                                            passes=LIGHT_PASSES))
+
+
 SCENES = {build.__name__: build for build in (grey_furnace, chromatic, heterogeneous, fluorescence, blackbody,
                                               glow, rayleigh, two_media, point_and_spot, area_lights, envmap,
-                                              surfaces, mesh_light, transparent_holdout)}
+                                              surfaces, mesh_light, transparent_holdout, light_passes,
+                                              fluorescent_light_passes)}
 
 
 def render_film(scene, backend, seed, spp=SPP) -> Film:
@@ -203,11 +229,12 @@ def render_film(scene, backend, seed, spp=SPP) -> Film:
     spectral image where the scene keeps one."""
     camera = scene.camera
     bands = band_scenes(scene)
-    film = Film(camera.width, camera.height, len(bands), bands[0].wavelengths.spectrum_edges)
+    categories = light_categories(scene.settings)
+    film = Film(camera.width, camera.height, len(bands), categories, bands[0].wavelengths.spectrum_edges)
     for band, kernel_scene in enumerate(bands):
         sums = render_unit(kernel_scene, band, (0, spp), (0, 0, camera.width, camera.height), seed, backend,
-                           spectrum=film.bins > 0)
-        film.add(band, 0, 0, sums[0], sums[1], spp, *sums[2:])
+                           categories, film.bins > 0)
+        film.add(band, 0, 0, *sums[:2], spp, *sums[2:])
     return film
 
 
@@ -295,6 +322,9 @@ def test_same_seed_traces_the_same_paths(films, name):
     assert close.all(), f"only {np.mean(close):.1%} of pixel values agree"
     close = np.isclose(numpy_film.sum_transparent, numba_film.sum_transparent, rtol=1e-12, atol=1e-300)
     assert close.all(), f"only {np.mean(close):.1%} of pixel transparencies agree"
+    # the light categories (differences of marks: an absolute tolerance at the pixel's scale)
+    scale = np.abs(numba_film.sum_xyz).max(initial=0.0)
+    np.testing.assert_allclose(numpy_film.sum_light, numba_film.sum_light, rtol=1e-12, atol=1e-12 * scale)
     assert numba_film.sum_spectrum.shape == numpy_film.sum_spectrum.shape
     close = np.isclose(numpy_film.sum_spectrum, numba_film.sum_spectrum, rtol=1e-12, atol=1e-300)
     assert close.all(), f"only {np.mean(close):.1%} of spectral bins agree"
