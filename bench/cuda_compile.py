@@ -10,8 +10,6 @@ for their registers, stack, spills and constant bytes. Figures in docs/architect
 import time
 from collections import defaultdict
 
-from numba import types, typeof
-
 from addon.tracer.kernels import cuda_target
 
 
@@ -43,16 +41,9 @@ def main():
           "mangled from the scene's whole type, 3 kB long: most of those KiB)")
 
     ks, batch = cuda_kernels.scene(), cuda_kernels.inputs()
-    out = types.float64[:, ::1]
-    kernels = {"phase_kernel": (typeof(batch["g"]), typeof(batch["u"]), out),
-               "medium_kernel": (typeof(ks), typeof(batch["points"]), typeof(batch["lams"]), typeof(batch["kelvin"]),
-                                 typeof(batch["u"]), out),
-               "light_kernel": (typeof(ks), types.int64, typeof(batch["points"]), typeof(batch["lams"]),
-                                typeof(batch["u"]), out),
-               "rng_kernel": (typeof(batch["pixels"]), typeof(batch["samples"]), out)}
     for kernel in cuda_kernels.KERNELS:
         start = time.perf_counter()
-        ptx, _ = cuda_target.compile_ptx(kernel, kernels[kernel.__name__])
+        ptx, _ = cuda_target.compile_ptx(kernel, cuda_kernels.argument_types(kernel, ks, batch))
         seconds = time.perf_counter() - start
         start = time.perf_counter()
         resources = cuda_target.assemble(ptx)

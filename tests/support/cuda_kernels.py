@@ -107,6 +107,20 @@ KERNELS = (phase_kernel, medium_kernel, light_kernel, rng_kernel)
 COLUMNS = 8
 
 
+def argument_types(kernel, ks, batch):
+    """The Numba types of `kernel`'s arguments as `run` launches it (for compiling it to PTX)."""
+    from numba import types, typeof
+
+    batch_types = {name: typeof(value) for name, value in batch.items()}
+    return {
+        phase_kernel: (batch_types["g"], batch_types["u"]),
+        medium_kernel: (typeof(ks), batch_types["points"], batch_types["lams"], batch_types["kelvin"],
+                        batch_types["u"]),
+        light_kernel: (typeof(ks), types.int64, batch_types["points"], batch_types["lams"], batch_types["u"]),
+        rng_kernel: (batch_types["pixels"], batch_types["samples"]),
+    }[kernel] + (types.float64[:, ::1],)
+
+
 def run(ks, batch):
     """Every kernel on the batch, on whatever `cuda` is (the simulator here): {name: (items, COLUMNS)}."""
     blocks = (N + THREADS - 1) // THREADS

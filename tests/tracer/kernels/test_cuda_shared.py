@@ -35,7 +35,7 @@ def test_every_shared_function_is_listed():
     assert ("kernels.media", "density") in listed and len(listed) > 70
 
 
-@pytest.mark.slow  # about 20 s here (80 functions, each compiled on its own)
+@pytest.mark.slow  # 16–19 s here (82 functions, each compiled on its own)
 def test_every_shared_function_compiles_to_ptx():
     failures = {}
     for function, argument_types in cuda_shared.signatures().items():
@@ -48,23 +48,16 @@ def test_every_shared_function_compiles_to_ptx():
     assert not failures
 
 
-@pytest.mark.slow  # about 25 s here, most of it ptxas on light_kernel
+@pytest.mark.slow  # about 7 s here for the four, 5 s of it light_kernel
 @pytest.mark.parametrize("kernel", cuda_kernels.KERNELS, ids=lambda kernel: kernel.__name__)
 def test_kernels_calling_shared_functions_compile_and_assemble(kernel):
     """The batch kernels, the kernel scene among their arguments, are whole CUDA kernels (`.entry`) for sm_90
     that allocate nothing (no calls into Numba's runtime), and ptxas assembles them without spilling registers,
     within the 64 KiB constant bank (the Sobol table once: 32 KiB)."""
-    from numba import types, typeof
+    from numba import types
 
-    ks, batch = cuda_kernels.scene(), cuda_kernels.inputs()
-    argument_types = {
-        "phase_kernel": (typeof(batch["g"]), typeof(batch["u"])),
-        "medium_kernel": (typeof(ks), typeof(batch["points"]), typeof(batch["lams"]), typeof(batch["kelvin"]),
-                          typeof(batch["u"])),
-        "light_kernel": (typeof(ks), types.int64, typeof(batch["points"]), typeof(batch["lams"]), typeof(batch["u"])),
-        "rng_kernel": (typeof(batch["pixels"]), typeof(batch["samples"])),
-    }[kernel.__name__]
-    ptx, return_type = cuda_target.compile_ptx(kernel, argument_types + (types.float64[:, ::1],))
+    argument_types = cuda_kernels.argument_types(kernel, cuda_kernels.scene(), cuda_kernels.inputs())
+    ptx, return_type = cuda_target.compile_ptx(kernel, argument_types)
     assert return_type == types.void and TARGET in ptx and ".entry" in ptx
     assert "NRT_" not in ptx and "malloc" not in ptx
     resources = cuda_target.assemble(ptx)
