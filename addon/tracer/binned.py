@@ -9,13 +9,15 @@ density per nm):
     stratified_binned(cdf, bin_pdf, u, n) -> (lams, pdfs)
 
 They are plain functions of arrays (the NumPy backend calls them on arrays of paths) and compile unchanged
-inside Numba kernels (`shared_math.shared`), where they are called with one path's scalars. This module is
-part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`); the distributions themselves are not.
+inside Numba kernels (`shared_math.shared`), where they are called with one path's scalars; except
+`stratified_binned`, which allocates its result and serves the NumPy side only
+(`sampling.stratified_wavelengths`). This module is part of the kernel cache's key
+(`numba_cache.KERNEL_SOURCES`); the distributions themselves are not.
 """
 
 import numpy as np
 
-from .shared_math import shared
+from .shared_math import floor, shared
 from .wavelengths import LAMBDA_MIN
 
 # u is clamped into [0, 1) (a generator's u = 1 would land past the last non-empty bin), and the
@@ -44,7 +46,7 @@ def sample_binned(cdf, u):
 def pdf_binned(bin_pdf, lam):
     """Density per nm at wavelength(s) `lam` of the bins `bin_pdf` (580 values on GRID); 0 off the grid."""
     x = lam - LAMBDA_MIN
-    i = np.int64(np.minimum(np.maximum(np.floor(x), 0.0), bin_pdf.size - 1.0))
+    i = np.int64(np.minimum(np.maximum(floor(x), 0.0), bin_pdf.size - 1.0))
     return bin_pdf[i] * ((x >= 0.0) & (x < bin_pdf.size))
 
 
@@ -55,13 +57,12 @@ def linear_over_binned(values, lam):
     each bin; this weight turns such a draw into one from the interpolated spectrum itself (it differs from
     1 only in bins where the spectrum changes, at the edges of a window, say)."""
     x = lam - LAMBDA_MIN
-    i = np.int64(np.minimum(np.maximum(np.floor(x), 0.0), values.size - 2.0))
+    i = np.int64(np.minimum(np.maximum(floor(x), 0.0), values.size - 2.0))
     t = x - i
     low, high = values[i], values[i + 1]
     return (low + (high - low) * t) / (0.5 * (low + high))
 
 
-@shared
 def stratified_binned(cdf, bin_pdf, u, n):
     """Hero wavelength and n−1 rotated companions: u_i = (u + i/n) mod 1, λ_i = sample_binned(cdf, u_i).
 

@@ -12,7 +12,7 @@ a (3,) array or a 3-tuple for one path, a (3, m) array for m paths; directions a
 
 import numpy as np
 
-from .shared_math import shared
+from .shared_math import absolute, cbrt, copysign, shared, sqrt
 
 INV_FOUR_PI = 1.0 / (4.0 * np.pi)
 # |g| beyond this is refused (`scene.Scene.validate`). The lobe of HG is about 1 − |g| radians wide and peaks at
@@ -28,10 +28,10 @@ def hg_pdf(g, cos_theta):
 
     With a = |g| and s = sign(g) the denominator is written (1 − a)² + 2a (1 − s cosθ), a sum of two
     non-negative terms: the textbook form cancels to zero or below near the forward peak as |g| → 1."""
-    a = np.abs(g)
+    a = absolute(g)
     one_minus_a = 1.0 - a
-    denom = one_minus_a * one_minus_a + 2.0 * a * (1.0 - np.copysign(1.0, g) * cos_theta)
-    return INV_FOUR_PI * one_minus_a * (1.0 + a) / (denom * np.sqrt(denom))
+    denom = one_minus_a * one_minus_a + 2.0 * a * (1.0 - copysign(1.0, g) * cos_theta)
+    return INV_FOUR_PI * one_minus_a * (1.0 + a) / (denom * sqrt(denom))
 
 
 @shared
@@ -63,8 +63,8 @@ def rayleigh_sample_cos(u):
     (ξ = 2u − 1), whose one real root (Cardano) is μ = A − 1/A with A = ∛(2ξ + √(1 + 4ξ²)). The root is
     odd in ξ, so it is evaluated at |ξ| (A ≥ 1, no cancellation inside the cube root) and given ξ's sign."""
     xi = 2.0 * u - 1.0
-    a = np.cbrt(2.0 * np.abs(xi) + np.sqrt(1.0 + 4.0 * xi * xi))
-    return np.minimum(np.copysign(a - 1.0 / a, xi), 1.0)
+    a = cbrt(2.0 * absolute(xi) + sqrt(1.0 + 4.0 * xi * xi))
+    return np.minimum(copysign(a - 1.0 / a, xi), 1.0)
 
 
 @shared
@@ -80,7 +80,7 @@ def orthonormal_basis(n):
     Duff et al. 2017, "Building an Orthonormal Basis, Revisited" (JCGT 6(1)): branch-free, using
     copysign for the hemisphere of n's z, and continuous everywhere except across z = 0."""
     x, y, z = n[0], n[1], n[2]
-    sign = np.copysign(1.0, z)
+    sign = copysign(1.0, z)
     a = -1.0 / (sign + z)
     b = x * y * a
     return (1.0 + sign * x * x * a, sign * b, -sign * x), (b, sign + y * y * a, -y)
@@ -90,7 +90,7 @@ def orthonormal_basis(n):
 def sample_direction(wi, cos_theta, u2):
     """The outgoing direction at angle cos_theta to `wi` (both propagation directions), azimuth 2πu2."""
     t, b = orthonormal_basis(wi)
-    sin_theta = np.sqrt(np.maximum((1.0 - cos_theta) * (1.0 + cos_theta), 0.0))
+    sin_theta = sqrt(np.maximum((1.0 - cos_theta) * (1.0 + cos_theta), 0.0))
     phi = 2.0 * np.pi * u2
     st, sb = sin_theta * np.cos(phi), sin_theta * np.sin(phi)
     return (

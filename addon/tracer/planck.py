@@ -7,7 +7,7 @@ validated temperatures) and the kernels (per-voxel temperatures, compiled by Num
 import numpy as np
 
 from .constants import BOLTZMANN, PLANCK, SPEED_OF_LIGHT
-from .shared_math import shared
+from .shared_math import exp, log1p, shared
 
 NANOMETRE = 1e-9  # metres
 FIRST_RADIATION_CONSTANT = 2 * PLANCK * SPEED_OF_LIGHT**2  # 2hc², W·m²·sr⁻¹
@@ -20,6 +20,6 @@ def planck_radiance(wavelength_nm, temperature):
     overflows (evaluated in log space: log(eˣ − 1) = x + log(1 − e⁻ˣ))."""
     metres = wavelength_nm * NANOMETRE
     x = SECOND_RADIATION_CONSTANT / (metres * np.maximum(temperature, 1e-3))
-    log_expm1 = x + np.log1p(-np.exp(-x))
-    per_metre = np.exp(np.log(FIRST_RADIATION_CONSTANT) - 5.0 * np.log(metres) - log_expm1)
+    log_expm1 = x + log1p(-exp(-x))
+    per_metre = exp(np.log(FIRST_RADIATION_CONSTANT) - 5.0 * np.log(metres) - log_expm1)
     return per_metre * NANOMETRE * (temperature > 0)

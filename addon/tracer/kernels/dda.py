@@ -10,7 +10,7 @@ cache's key (`numba_cache.KERNEL_SOURCES`).
 
 import numpy as np
 
-from ..shared_math import select, shared_inline
+from ..shared_math import absolute, floor, select, shared_inline
 
 
 @shared_inline
@@ -28,8 +28,8 @@ def axis_span(o, d, upper, t0, t1):
 def axis_entry(o, d, t, block, cells):
     """The walk's state on one axis where the ray o + t·d enters the block grid: (block index clamped into
     the `cells` blocks, step ±1 or 0, ray parameter of the next block boundary, spacing of boundaries)."""
-    cell = np.minimum(np.maximum(np.int64(np.floor((o + t * d) / block)), 0), cells - 1)
+    cell = np.minimum(np.maximum(np.int64(floor((o + t * d) / block)), 0), cells - 1)
     moving = d != 0.0
     step = select(d > 0.0, 1, select(d < 0.0, -1, 0))
     boundary = ((cell + (d > 0.0)) * block - o) / d
-    return cell, step, select(moving, boundary, np.inf), select(moving, np.abs(block / d), np.inf)
+    return cell, step, select(moving, boundary, np.inf), select(moving, absolute(block / d), np.inf)

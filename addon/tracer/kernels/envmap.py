@@ -21,7 +21,7 @@ paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_
 
 import numpy as np
 
-from ..shared_math import shared, shared_inline
+from ..shared_math import floor, shared, shared_inline, sqrt
 from .lookups import cdf_bin, table_at
 
 
@@ -41,8 +41,8 @@ def texel_of(ks, light, dx, dy, dz):
     z = m[2, 0] * dx + m[2, 1] * dy + m[2, 2] * dz
     u = 0.5 - np.arctan2(y, x) * (0.5 / np.pi)
     polar = np.arccos(np.minimum(np.maximum(z, -1.0), 1.0))
-    column = np.int64(np.minimum(np.maximum(np.floor(u * columns), 0.0), columns - 1.0))
-    row = np.int64(np.minimum(np.floor(polar * (rows / np.pi)), rows - 1.0))
+    column = np.int64(np.minimum(np.maximum(floor(u * columns), 0.0), columns - 1.0))
+    row = np.int64(np.minimum(floor(polar * (rows / np.pi)), rows - 1.0))
     return row, column
 
 
@@ -88,7 +88,7 @@ def envmap_sample(ks, light, u1, u2):
     top, bottom = np.cos(np.pi * row / rows), np.cos(np.pi * (row + 1.0) / rows)
     z = top - along_row * (top - bottom)
     azimuth = np.pi * (1.0 - 2.0 * (column + along_column) / columns)  # atan2(y, x) at u = (column + t) / W
-    radius = np.sqrt(np.maximum(1.0 - z * z, 0.0))
+    radius = sqrt(np.maximum(1.0 - z * z, 0.0))
     x, y = radius * np.cos(azimuth), radius * np.sin(azimuth)
     m = ks.envmaps.to_map[light]  # orthonormal: its transpose takes the map's frame to the world
     return (m[0, 0] * x + m[1, 0] * y + m[2, 0] * z, m[0, 1] * x + m[1, 1] * y + m[2, 1] * z,

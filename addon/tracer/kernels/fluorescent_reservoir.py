@@ -25,7 +25,7 @@ paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_
 
 import numpy as np
 
-from ..shared_math import shared
+from ..shared_math import exp, shared
 
 # Probabilities of taking the unguided, the front-guided and the back-guided reservoir's collision.
 SHARES = (0.5, 0.25, 0.25)
@@ -37,13 +37,13 @@ DEPTH_LIMIT = 500.0
 @shared
 def front_guide(tau):
     """g₁(τ) = exp(−τ)."""
-    return np.exp(-tau)
+    return exp(-tau)
 
 
 @shared
 def back_guide(tau):
     """g₂(τ) = exp(min(τ, DEPTH_LIMIT))."""
-    return np.exp(np.minimum(tau, DEPTH_LIMIT))
+    return exp(np.minimum(tau, DEPTH_LIMIT))
 
 
 @shared

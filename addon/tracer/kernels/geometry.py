@@ -5,9 +5,7 @@ Plain arithmetic shared by both backends (`shared_math`): one path's scalars in 
 paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`).
 """
 
-import numpy as np
-
-from ..shared_math import shared
+from ..shared_math import shared, sqrt
 from .layout import CAMERA_PERSPECTIVE
 
 
@@ -30,7 +28,7 @@ def transform_vector(m, x, y, z):
 @shared
 def normalize(x, y, z):
     """(x, y, z) scaled to unit length."""
-    inv = 1.0 / np.sqrt(x * x + y * y + z * z)
+    inv = 1.0 / sqrt(x * x + y * y + z * z)
     return x * inv, y * inv, z * inv
 
 
@@ -58,5 +56,5 @@ def camera_depths(to_world, kind, t, dx, dy, dz):
     perspective camera (its rays start at the camera), the depth for an orthographic one (they start on its
     film plane)."""
     ax, ay, az = -to_world[0, 2], -to_world[1, 2], -to_world[2, 2]
-    depth = t * (dx * ax + dy * ay + dz * az) / np.sqrt(ax * ax + ay * ay + az * az)
+    depth = t * (dx * ax + dy * ay + dz * az) / sqrt(ax * ax + ay * ay + az * az)
     return depth, t if kind == CAMERA_PERSPECTIVE else depth

@@ -13,7 +13,7 @@ They branch on a light's own parameters, never on a path's values. Part of the k
 import numpy as np
 
 from ..phase import INV_FOUR_PI, sample_direction
-from ..shared_math import select, shared, shared_inline
+from ..shared_math import absolute, copysign, select, shared, shared_inline, sqrt
 from .envmap import envmap_pdf, envmap_radiance, envmap_sample
 from .layout import (
     AREA_ELLIPSE, LIGHT_AREA, LIGHT_ENVIRONMENT, LIGHT_ENVMAP, LIGHT_MESH, LIGHT_POINT, LIGHT_SKY, LIGHT_SPOT,
@@ -101,7 +101,7 @@ def uniform_area_point(ks, light, u1, u2):
     """A point (qx, qy, qz) of an area light for uniforms u1, u2, uniform over its area: over the rectangle,
     or over the ellipse in polar coordinates (radius √u1 of its half-axes, angle 2π u2)."""
     if ks.lights.area_shape[light] == AREA_ELLIPSE:
-        radius, angle = np.sqrt(u1), 2.0 * np.pi * u2
+        radius, angle = sqrt(u1), 2.0 * np.pi * u2
         a, b = radius * np.cos(angle), radius * np.sin(angle)
     else:
         a, b = 2.0 * u1 - 1.0, 2.0 * u2 - 1.0
@@ -121,8 +121,8 @@ def _rectangle_frame(ks, light, px, py, pz):
     """A rectangle light seen from point(s) (px, py, pz): its unit axes ex, ey, ez = ex × ey (9 components),
     and in that frame with origin p its corners' coordinates x0 < x1, y0 < y1 and its plane's z."""
     span, centre = ks.lights.area_span[light], ks.lights.pos[light]
-    half_x = np.sqrt(span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
-    half_y = np.sqrt(span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2])
+    half_x = sqrt(span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
+    half_y = sqrt(span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2])
     exx, exy, exz = span[0, 0] / half_x, span[0, 1] / half_x, span[0, 2] / half_x
     eyx, eyy, eyz = span[1, 0] / half_y, span[1, 1] / half_y, span[1, 2] / half_y
     ezx, ezy, ezz = exy * eyz - exz * eyy, exz * eyx - exx * eyz, exx * eyy - exy * eyx
@@ -138,8 +138,8 @@ def _rectangle_angles(x0, y0, x1, y1, z0):
     """The z components of the normals of the planes through the origin and each edge of the rectangle with
     corners (x0 or x1, y0 or y1, z0), z0 ≤ 0 (the others cancel in the products), two of its angles on the
     sphere between consecutive planes (g2, g3), and its solid angle, the sum of the four angles less 2π."""
-    n0z, n1z = -y0 / np.sqrt(z0 * z0 + y0 * y0), x1 / np.sqrt(z0 * z0 + x1 * x1)
-    n2z, n3z = y1 / np.sqrt(z0 * z0 + y1 * y1), -x0 / np.sqrt(z0 * z0 + x0 * x0)
+    n0z, n1z = -y0 / sqrt(z0 * z0 + y0 * y0), x1 / sqrt(z0 * z0 + x1 * x1)
+    n2z, n3z = y1 / sqrt(z0 * z0 + y1 * y1), -x0 / sqrt(z0 * z0 + x0 * x0)
     g0, g1, g2, g3 = _angle(-n0z * n1z), _angle(-n1z * n2z), _angle(-n2z * n3z), _angle(-n3z * n0z)
     return n0z, n2z, g2, g3, g0 + g1 + g2 + g3 - 2.0 * np.pi
 
@@ -148,7 +148,7 @@ def _rectangle_angles(x0, y0, x1, y1, z0):
 def rectangle_solid_angle(ks, light, px, py, pz):
     """The solid angle a rectangle light subtends from point(s) (px, py, pz)."""
     frame = _rectangle_frame(ks, light, px, py, pz)
-    return _rectangle_angles(frame[9], frame[10], frame[11], frame[12], -np.abs(frame[13]))[4]
+    return _rectangle_angles(frame[9], frame[10], frame[11], frame[12], -absolute(frame[13]))[4]
 
 
 @shared_inline
@@ -159,18 +159,18 @@ def spherical_rectangle_point(ks, light, px, py, pz, u1, u2):
     axes ex, ey and ez = ex × ey, origin at p) its corners are (x0 or x1, y0 or y1, z), and the algorithm
     works with z0 = −|z|."""
     exx, exy, exz, eyx, eyy, eyz, ezx, ezy, ezz, x0, y0, x1, y1, z = _rectangle_frame(ks, light, px, py, pz)
-    z0 = -np.abs(z)
+    z0 = -absolute(z)
     n0z, n2z, g2, g3, solid_angle = _rectangle_angles(x0, y0, x1, y1, z0)
     # x: invert the solid angle's cdf along the rectangle's x edge.
     au = u1 * solid_angle + (2.0 * np.pi - g2 - g3)
     fu = (np.cos(au) * n0z - n2z) / np.sin(au)
-    cu = np.minimum(np.maximum(np.copysign(1.0 / np.sqrt(fu * fu + n0z * n0z), fu), -ONE_BELOW), ONE_BELOW)
-    xu = np.minimum(np.maximum(-cu * z0 / np.sqrt(1.0 - cu * cu), x0), x1)
+    cu = np.minimum(np.maximum(copysign(1.0 / sqrt(fu * fu + n0z * n0z), fu), -ONE_BELOW), ONE_BELOW)
+    xu = np.minimum(np.maximum(-cu * z0 / sqrt(1.0 - cu * cu), x0), x1)
     # y: uniform in the sine of the elevation along the column at xu.
-    d = np.sqrt(xu * xu + z0 * z0)
-    h0, h1 = y0 / np.sqrt(d * d + y0 * y0), y1 / np.sqrt(d * d + y1 * y1)
+    d = sqrt(xu * xu + z0 * z0)
+    h0, h1 = y0 / sqrt(d * d + y0 * y0), y1 / sqrt(d * d + y1 * y1)
     hv = h0 + u2 * (h1 - h0)
-    yv = np.minimum(np.maximum(hv * d / np.sqrt(np.maximum(1.0 - hv * hv, 0.0)), y0), y1)
+    yv = np.minimum(np.maximum(hv * d / sqrt(np.maximum(1.0 - hv * hv, 0.0)), y0), y1)
     return (px + xu * exx + yv * eyx + z * ezx, py + xu * exy + yv * eyy + z * ezy,
             pz + xu * exz + yv * eyz + z * ezz, solid_angle)
 
@@ -180,7 +180,7 @@ def area_light_area(ks, light):
     """An area light's area: 4 |X| |Y| for a rectangle of half-axes X, Y (`area_span`), π |X| |Y| for an
     ellipse."""
     span = ks.lights.area_span[light]
-    product = np.sqrt((span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
+    product = sqrt((span[0, 0] * span[0, 0] + span[0, 1] * span[0, 1] + span[0, 2] * span[0, 2])
                       * (span[1, 0] * span[1, 0] + span[1, 1] * span[1, 1] + span[1, 2] * span[1, 2]))
     if ks.lights.area_shape[light] == AREA_ELLIPSE:
         return np.pi * product
@@ -232,7 +232,7 @@ def area_light_hit(ks, light, ox, oy, oz, dx, dy, dz, t_max):
     if ks.lights.area_shape[light] == AREA_ELLIPSE:
         inside = a * a + b * b <= 1.0
     else:
-        inside = (np.abs(a) <= 1.0) & (np.abs(b) <= 1.0)
+        inside = (absolute(a) <= 1.0) & (absolute(b) <= 1.0)
     return select(inside & (t > 0.0) & (t < t_max), t, np.inf)
 
 
@@ -280,7 +280,7 @@ def sample_light(ks, light, px, py, pz, u1, u2):
         return wx, wy, wz, 1.0 / sun_solid_angle(ks, light), np.inf, 1.0
     if kind == LIGHT_ENVIRONMENT or kind == LIGHT_SKY:
         wz = 1.0 - 2.0 * u1
-        r = np.sqrt(np.maximum(0.0, 1.0 - wz * wz))
+        r = sqrt(np.maximum(0.0, 1.0 - wz * wz))
         return r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2), wz, INV_FOUR_PI, np.inf, 1.0
     if kind == LIGHT_ENVMAP:
         wx, wy, wz, direction_pdf = envmap_sample(ks, light, u1, u2)
@@ -288,9 +288,9 @@ def sample_light(ks, light, px, py, pz, u1, u2):
     if kind == LIGHT_MESH:
         qx, qy, qz, nx, ny, nz = emitter_point(ks, light, u1, u2)
         vx, vy, vz = qx - px, qy - py, qz - pz
-        distance = np.sqrt(vx * vx + vy * vy + vz * vz)
+        distance = sqrt(vx * vx + vy * vy + vz * vz)
         wx, wy, wz = vx / distance, vy / distance, vz / distance
-        cos_light = np.abs(wx * nx + wy * ny + wz * nz)
+        cos_light = absolute(wx * nx + wy * ny + wz * nz)
         area = ks.surfaces.area[ks.surfaces.of_light[light]]
         return wx, wy, wz, emitter_pdf(area, distance, cos_light), distance, 1.0
     position = ks.lights.pos[light]
@@ -298,7 +298,7 @@ def sample_light(ks, light, px, py, pz, u1, u2):
     if kind == LIGHT_AREA:
         qx, qy, qz, solid_angle = area_point(ks, light, px, py, pz, u1, u2)
     vx, vy, vz = qx - px, qy - py, qz - pz
-    distance = np.sqrt(vx * vx + vy * vy + vz * vz)
+    distance = sqrt(vx * vx + vy * vy + vz * vz)
     wx, wy, wz = vx / distance, vy / distance, vz / distance
     falloff = 1.0 / (distance * distance)
     if kind == LIGHT_SPOT:

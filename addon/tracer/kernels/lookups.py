@@ -7,7 +7,7 @@ paths in the NumPy backend. Part of the kernel cache's key (`numba_cache.KERNEL_
 
 import numpy as np
 
-from ..shared_math import select, shared, shared_inline
+from ..shared_math import floor, select, shared, shared_inline
 from ..wavelengths import GRID, LAMBDA_MIN
 
 _NODES = GRID.size
@@ -42,9 +42,9 @@ def table_at(table, row, at):
 def _corners(coordinate, cells, stride):
     """Along one axis of a grid of `cells` cells: the flat-index terms of the cells below and above the
     coordinate (clamped into the grid) and their weights, zero for a cell outside the grid."""
-    floor = np.floor(coordinate)
-    below = np.int64(floor)
-    frac = coordinate - floor
+    floored = floor(coordinate)
+    below = np.int64(floored)
+    frac = coordinate - floored
     above = below + 1
     return (np.minimum(np.maximum(below, 0), cells - 1) * stride, np.minimum(np.maximum(above, 0), cells - 1) * stride,
             (1.0 - frac) * ((below >= 0) & (below < cells)), frac * ((above >= 0) & (above < cells)))

@@ -11,7 +11,7 @@ branch on a medium's own parameters, never on a path's values. Part of the kerne
 import numpy as np
 
 from ..phase import hg_pdf, rayleigh_pdf
-from ..shared_math import shared
+from ..shared_math import exp, shared
 from .geometry import transform_point
 from .layout import PHASE_RAYLEIGH
 from .lookups import evenly_spaced_at, table_at, trilinear
@@ -75,7 +75,7 @@ def blackbody_normalisation(ks, kelvin):
     """Cycles' scale of Planck's law at T (K): (σT⁴/π) / Y(Planck(·, T)), its logarithm interpolated linearly
     in log T on the lowered table (`glow.normalisation_table`), clamped beyond its ends."""
     log_kelvin = np.log(np.maximum(kelvin, 1e-3))
-    return np.exp(evenly_spaced_at(ks.glow.log_normalisation, ks.glow.log_kelvin[0], ks.glow.log_kelvin[1],
+    return exp(evenly_spaced_at(ks.glow.log_normalisation, ks.glow.log_kelvin[0], ks.glow.log_kelvin[1],
                                    log_kelvin))
 
 

@@ -130,8 +130,9 @@ def nested_scramble(x, seed):
 @shared
 def sobol(index, dimension):
     """Point `index` (< 2³²) of Sobol dimension `dimension` (0-3) as a 32-bit fraction."""
-    return (SOBOL_BYTES[dimension, 0, index & _BYTE] ^ SOBOL_BYTES[dimension, 1, (index >> _S8) & _BYTE]
-            ^ SOBOL_BYTES[dimension, 2, (index >> _S16) & _BYTE] ^ SOBOL_BYTES[dimension, 3, (index >> _S24) & _BYTE])
+    table = SOBOL_BYTES  # named once: CUDA code holds a copy of a global array per reference to it
+    return (table[dimension, 0, index & _BYTE] ^ table[dimension, 1, (index >> _S8) & _BYTE]
+            ^ table[dimension, 2, (index >> _S16) & _BYTE] ^ table[dimension, 3, (index >> _S24) & _BYTE])
 
 
 @shared

@@ -14,7 +14,7 @@ so a sampled direction's throughput is ρ, the same pdf at every wavelength.
 
 import numpy as np
 
-from ..shared_math import select, shared, shared_inline
+from ..shared_math import absolute, select, shared, shared_inline, sqrt
 from .layout import SURFACE_OFFSET
 from .lookups import cdf_bin
 
@@ -54,7 +54,7 @@ def facing_normal(ks, k, dx, dy, dz):
 def offset_point(px, py, pz, nx, ny, nz):
     """Point(s) on a surface moved off it along the unit normal (nx, ny, nz) by SURFACE_OFFSET relative to
     their size, where rays leaving the surface on that side start (and do not find it again)."""
-    scale = SURFACE_OFFSET * (1.0 + np.maximum(np.maximum(np.abs(px), np.abs(py)), np.abs(pz)))
+    scale = SURFACE_OFFSET * (1.0 + np.maximum(np.maximum(absolute(px), absolute(py)), absolute(pz)))
     return px + scale * nx, py + scale * ny, pz + scale * nz
 
 
@@ -67,7 +67,7 @@ def lambert_pdf(cos_theta):
 @shared
 def lambert_sample_cos(u):
     """cos θ of a cosine-weighted direction for a uniform u (the azimuth is uniform: `phase.sample_direction`)."""
-    return np.sqrt(u)
+    return sqrt(u)
 
 
 @shared_inline
@@ -79,7 +79,7 @@ def emitter_point(ks, light, u1, u2):
     offset = ks.surfaces.emitter_offset[s]
     bin_, position = cdf_bin(ks.surfaces.emitter_cdf, offset, ks.surfaces.emitter_count[s], u1)
     k = ks.surfaces.emitter_triangle[offset + bin_]
-    root = np.sqrt(position)
+    root = sqrt(position)
     b1, b2 = root * (1.0 - u2), root * u2
     corner, edge1, edge2, normal = ks.surfaces.corner, ks.surfaces.edge1, ks.surfaces.edge2, ks.surfaces.normal
     return (corner[k, 0] + b1 * edge1[k, 0] + b2 * edge2[k, 0], corner[k, 1] + b1 * edge1[k, 1] + b2 * edge2[k, 1],
