@@ -9,7 +9,9 @@ render and can be called from a modal operator between UI events (Cycles runs on
 so nothing renders in the background; it cannot run inside another render engine's render, so F12 and
 the Rendered viewport cannot run it); `run()` makes them all. Between steps the scene is
 the user's own, and every step restores it even when Cycles fails. Cycles' images and the fluid domains'
-grids (`fluids`, written once) go to a temporary folder, removed when the job ends.
+grids (`fluids`, written once) go to a temporary folder, removed when the job ends. The data passes (Depth,
+Mist, Normal, Cryptomatte) are the tracer's own, from the camera rays' first hits after the last render
+(`tracer.render.first_hit_passes`): they depend on no band.
 """
 
 import dataclasses
@@ -20,12 +22,12 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from ..export.passes import without_passes
+from ..export.passes import without_light_passes
 from ..export.scene import Export
 from ..jobs.protocol import Job
 from ..tracer import image_io
 from ..tracer.errors import SpectralError
-from ..tracer.render import RenderResult
+from ..tracer.render import RenderResult, band_scenes, first_hit_passes
 from ..tracer.scene import Scene
 from . import fluids, setup
 from .band_plan import DEFAULT_MAX_RENDERS, plan_bands
@@ -44,7 +46,7 @@ class EmulationJob(Job):
     def __init__(self, scene, tracer_scene: Scene, warnings=(), *, band_count: int | None = None,
                  max_renders: int = DEFAULT_MAX_RENDERS, shader: str = "SVM", spp: int | None = None):
         super().__init__(warnings)
-        self.scene = scene
+        self.scene, self._tracer_scene = scene, tracer_scene
         self.band_plan = None if band_count is not None else plan_bands(tracer_scene, max_renders=max_renders)
         self.plan = make_plan(tracer_scene, band_count if self.band_plan is None else self.band_plan.bands)
         self._media = {medium.name: medium for medium in tracer_scene.media}
@@ -69,7 +71,7 @@ class EmulationJob(Job):
         """With the Render settings' bands and shader (Cycles renders here: `scheduler` is not asked)."""
         settings = scene.spectral
         band_count = settings.emulation_bands if settings.emulation_band_mode == "FIXED" else None
-        export = without_passes(export, "the Cycles emulation")
+        export = without_light_passes(export, "the Cycles emulation")
         tracer_settings = export.scene.settings
         if tracer_settings.clamp_direct > 0 or tracer_settings.clamp_indirect > 0:
             # Cycles' clamp would act on each render's three bands as if they were R, G and B: not the tracer's
@@ -108,7 +110,10 @@ class EmulationJob(Job):
         if not self.running:
             return
         if self._cancel or not self._queue:
-            self.result = RenderResult(film=self.film, cancelled=bool(self._queue), seconds=self._seconds)
+            cancelled = bool(self._queue)
+            passes = None if cancelled else self._data_passes()
+            self.result = RenderResult(film=self.film, cancelled=cancelled or passes is None, seconds=self._seconds,
+                                       **({"passes": passes} if passes is not None else {}))
             self._scratch.cleanup()
             return
         start = time.perf_counter()
@@ -133,6 +138,15 @@ class EmulationJob(Job):
             if progress is not None and self.running:
                 progress(self.film, self.fraction)
         return self.result
+
+    def _data_passes(self):
+        """The data passes the scene asks for, as the tracer makes them (geometry only: no band to emulate)."""
+        start = time.perf_counter()
+        scene = self._tracer_scene
+        try:
+            return first_hit_passes(scene, band_scenes(scene)[0], 2 * self.samples, self.seed, scene.settings.backend)
+        finally:
+            self._seconds += time.perf_counter() - start
 
     def _render(self, members) -> tuple[np.ndarray, np.ndarray]:
         """The two halves of one planned render, (height, width, 3) each, top row first."""

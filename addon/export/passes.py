@@ -10,7 +10,7 @@ its light passes Emission, Environment, Volume Direct and Volume Indirect (Cycle
 import dataclasses
 
 from ..tracer.light_passes import EMIT, ENV, VOLUME_DIR, VOLUME_IND
-from ..tracer.passes import CRYPTO_MATERIAL, CRYPTO_OBJECT, DEPTH, MIST, NORMAL
+from ..tracer.passes import CRYPTO_MATERIAL, CRYPTO_OBJECT, DATA_PASSES, DEPTH, MIST, NORMAL
 
 # The View Layer's toggle of each data pass the engine makes.
 TOGGLES = {DEPTH: "use_pass_z", MIST: "use_pass_mist", NORMAL: "use_pass_normal",
@@ -80,18 +80,20 @@ def unmade_warning(view_layer) -> str | None:
             "Direct and Volume Indirect)")
 
 
-def without_passes(export, renderer: str):
-    """`export` (an `Export`) for a renderer that makes no data or light passes and no spectral image (the Dask
-    farm, the Cycles emulation): its scene asks for none, and a warning names those left out."""
-    wanted, spectrum = export.scene.settings.passes, export.scene.settings.spectrum
-    if not wanted and not spectrum:
+def without_light_passes(export, renderer: str):
+    """`export` (an `Export`) for a renderer that makes the data passes (from the camera rays' first hits,
+    `tracer.render.first_hit_passes`) but no light passes and no spectral image (the Dask farm, the Cycles
+    emulation): its scene asks for none of those, and a warning names those left out."""
+    settings = export.scene.settings
+    light = tuple(name for name in settings.passes if name not in DATA_PASSES)
+    if not light and not settings.spectrum:
         return export
-    settings = dataclasses.replace(export.scene.settings, passes=(), spectrum=False)
+    kept = tuple(name for name in settings.passes if name in DATA_PASSES)
+    settings = dataclasses.replace(settings, passes=kept, spectrum=False)
     warnings = []
-    if wanted:
-        warnings.append(f"{renderer} does not render data or light passes yet: {', '.join(wanted)} left out of the "
-                        "render")
-    if spectrum:
+    if light:
+        warnings.append(f"{renderer} does not render light passes yet: {', '.join(light)} left out of the render")
+    if export.scene.settings.spectrum:
         warnings.append(f"{renderer} does not make the spectral image yet: no Spectral EXR written")
     return dataclasses.replace(export, scene=dataclasses.replace(export.scene, settings=settings),
                                warnings=[*export.warnings, *warnings])

@@ -33,7 +33,8 @@ from . import distributed as worker
 from .errors import SpectralError
 from .farm_plan import PassMerger, Unit, plan
 from .film import Film
-from .render import RenderResult, band_scenes, render_stats
+from .passes import DATA_PASSES
+from .render import RenderResult, band_scenes, first_hit_passes, render_stats
 from .scene import Scene
 from .validation import check_settings
 
@@ -269,7 +270,10 @@ class RenderFarm:
             raise KeyboardInterrupt
         if not cancelled and not job.merger.complete:
             raise SpectralError("internal error: every task completed but the film is missing passes")
-        return self._result(job, tasks, time.perf_counter() - start, setup_seconds, cancelled)
+        # The data passes need no farm: the first hits of the camera rays, on this computer (`first_hit_passes`).
+        passes = None if cancelled else first_hit_passes(scene, job.bands[0], job.spp, job.seed, job.backend, cancel)
+        result = self._result(job, tasks, time.perf_counter() - start, setup_seconds, passes is None)
+        return dataclasses.replace(result, passes=passes) if passes is not None else result
 
     def _threads_per_task(self, threads: int | None) -> int | None:
         """Kernel threads per task: `threads`, or on a local farm its cores shared among its workers (None:
@@ -357,9 +361,13 @@ class _Job:
     @classmethod
     def of(cls, scene: Scene, spp: int | None, seed: int | None, backend: str | None, tile_size: int) -> "_Job":
         settings = scene.settings
-        if settings.passes:
-            raise SpectralError(f"a farm does not render data passes yet ({', '.join(settings.passes)}): "
-                                "render them on this computer, or turn them off")
+        light = [name for name in settings.passes if name not in DATA_PASSES]
+        if light:
+            raise SpectralError(f"a farm does not render light passes yet ({', '.join(light)}): render them on this "
+                                "computer, or turn them off")
+        if settings.spectrum:
+            raise SpectralError("a farm does not make the spectral image yet (render.spectrum): render it on this "
+                                "computer, or turn it off")
         spp = settings.spp if spp is None else spp
         seed = settings.seed if seed is None else seed
         backend = backend or settings.backend

@@ -15,7 +15,7 @@ import numpy as np
 from .shared_math import absolute, cbrt, copysign, shared, sqrt
 
 INV_FOUR_PI = 1.0 / (4.0 * np.pi)
-# |g| beyond this is refused (`scene.Scene.validate`). The lobe of HG is about 1 − |g| radians wide and peaks at
+# |g| beyond this is refused (`validation.validate`). The lobe of HG is about 1 − |g| radians wide and peaks at
 # (1 + |g|) / (4π (1 − |g|)²): at 1 − 1e-6 that is 1.6e11 per steradian, and cosθ near 1 still resolves
 # the lobe in float64 (steps of 1.5e-8 rad). Closer to 1 the lobe falls between representable cosines
 # and single samples carry absurd weights (at 1 − 1e-10, NaN pixels before the pdf was made stable).

@@ -146,6 +146,19 @@ class RenderResult:
     passes: PassImages = field(default_factory=lambda: PassImages({}, {}))
 
 
+def first_hit_passes(scene: Scene, kernel_scene: KernelScene, spp: int, seed: int, backend: str, cancel=None,
+                     notice=None) -> PassImages | None:
+    """The data passes the scene asks for (`passes.render_passes`: none when it asks for none), the backend's
+    first-hit kernel made ready first (`Backend.prepare_first_hits`); None when `cancel()` said stop meanwhile.
+    They need only the camera and the surfaces, so a farm or the Cycles emulation makes them here too."""
+    if not any(name in DATA_PASSES for name in scene.settings.passes):
+        return PassImages({}, {})
+    if not backends.named(backend).prepare_first_hits(kernel_scene, cancel, notice):
+        return None
+    with KERNEL_LAUNCH:
+        return render_passes(scene, kernel_scene, spp, seed, backend)
+
+
 def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, backend: str | None = None,
            threads: int | None = None, progress=None, cancel=None, notice=None,
            unit_seconds: float = UNIT_SECONDS) -> RenderResult:
@@ -186,13 +199,9 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
         done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)
-    data_passes = PassImages({}, {})
-    wants_data = any(name in DATA_PASSES for name in settings.passes)
-    if wants_data and not cancelled:
-        cancelled = not chosen.prepare_first_hits(bands[0], cancel, notice)
-    if wants_data and not cancelled:
-        with KERNEL_LAUNCH:
-            data_passes = render_passes(scene, bands[0], spp, seed, backend)
+    data_passes = None if cancelled else first_hit_passes(scene, bands[0], spp, seed, backend, cancel, notice)
+    cancelled = data_passes is None
+    data_passes = data_passes or PassImages({}, {})
     data_passes.images.update(light_images(film, settings))
     seconds = time.perf_counter() - start
     return RenderResult(film=film, cancelled=cancelled, seconds=seconds, stats=render_stats(film, seconds, backend),

@@ -161,18 +161,37 @@ def test_the_passes_panel_offers_only_the_passes_the_engine_makes(registered):
 
 
 @pytest.mark.parametrize("renderer", ["farm", "emulation"])
-def test_a_farm_and_the_emulation_name_the_data_passes_they_leave_out(registered, renderer):
+def test_a_farm_and_the_emulation_make_the_data_passes_and_name_the_light_passes_they_leave_out(registered,
+                                                                                                 renderer):
     from addon.jobs.kinds import render_job
 
     scene, _ = surfaces_scene()
+    scene.view_layers[0].use_pass_emit = True
     export = export_scene(bpy.context.evaluated_depsgraph_get())
     if renderer == "emulation":
         scene.spectral.renderer = "CYCLES"
     job = render_job(scene, export, scheduler="tcp://127.0.0.1:1" if renderer == "farm" else None)
-    if renderer == "farm":
-        assert job.scene.settings.passes == ()  # the farm is not asked for them (it would refuse)
-    warning = next(w for w in job.warnings if "does not render data or light passes" in w)
-    assert "Depth, Mist, Normal, CryptoObject, CryptoMaterial" in warning
+    kept = job.scene.settings.passes if renderer == "farm" else job._tracer_scene.settings.passes
+    assert kept == ("Depth", "Mist", "Normal", "CryptoObject", "CryptoMaterial")  # made from the first hits
+    warning = next(w for w in job.warnings if "does not render light passes" in w)
+    assert warning.endswith("yet: Emission left out of the render")
+
+
+def test_the_emulation_makes_the_data_passes_as_the_tracer(registered):
+    """The Cycles emulation's data passes are the tracer's: the same first hits, so the same images."""
+    from addon.cycles_emulation.job import EmulationJob
+    from addon.tracer.render import band_scenes, first_hit_passes
+
+    surfaces_scene()
+    export = export_scene(bpy.context.evaluated_depsgraph_get())
+    job = EmulationJob.for_export(bpy.context.scene, export, spp=2)
+    assert job.run() is job.result and not job.result.cancelled
+    tracer = first_hit_passes(export.scene, band_scenes(export.scene)[0], 2, export.scene.settings.seed,
+                              export.scene.settings.backend)
+    assert set(job.result.passes.images) == set(tracer.images) and len(tracer.images) >= 5
+    for name, image in tracer.images.items():
+        np.testing.assert_array_equal(job.result.passes.images[name], image)
+    assert job.result.passes.mattes == tracer.mattes
 
 
 def test_render_to_image_and_the_cli_write_the_data_passes_as_f12(registered, tmp_path):

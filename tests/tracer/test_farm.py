@@ -5,6 +5,7 @@ command line, with PYTHONPATH set to this repository so the workers import `addo
 fixtures, even when a test fails. Scenes are tiny: the machine running CI may have two cores.
 """
 
+import dataclasses
 import json
 import os
 import re
@@ -21,7 +22,15 @@ import pytest
 from addon.tracer import cli, distributed, farm, image_io
 from addon.tracer import render as single
 from addon.tracer.errors import SpectralError
+from tests.support import scenes as s
 from tests.support.farm import assert_same_film, small_scene
+
+
+def with_floor(scene):
+    """`scene` with a diffuse floor under its box, and the Depth, Normal and CryptoObject passes asked for."""
+    floor = s.parallelogram((-3.0, -3.0, -0.6), (6.0, 0.0, 0.0), (0.0, 6.0, 0.0), 2, name="floor")
+    settings = dataclasses.replace(scene.settings, passes=("Depth", "Normal", "CryptoObject"))
+    return dataclasses.replace(scene, surfaces=(*scene.surfaces, floor), settings=settings)
 
 ROOT = Path(__file__).resolve().parents[2]
 START_TIMEOUT = 120.0  # seconds for a scheduler or worker process to come up on a busy machine
@@ -202,6 +211,20 @@ def test_scheduler_and_two_workers_give_the_single_process_image(reference, loop
     assert result.stats["workers"] == 2
     assert result.stats["tasks"] == len(single.pass_sizes(24)) * 2 * 6
     assert fractions == sorted(fractions) and fractions[-1] == 1.0
+
+
+@pytest.mark.slow
+def test_a_farm_makes_the_data_passes_as_one_process_does(loopback):
+    """The data passes come from the camera rays' first hits, made beside the farm's merge: the same images
+    and manifests as a single-process render's (here a floor under the box: depths, normals, mattes)."""
+    scene = with_floor(small_scene(spp=4, bands=1))
+    expected = single.render(scene).passes
+    result = farm.render(scene, scheduler=loopback.address, tile_size=5)
+    assert set(result.passes.images) == set(expected.images) >= {"Depth", "Normal", "CryptoObject00"}
+    assert np.any(expected.images["Depth"] < 1e9)  # the floor is seen
+    for name, image in expected.images.items():
+        np.testing.assert_array_equal(result.passes.images[name], image)
+    assert result.passes.mattes == expected.mattes
 
 
 @pytest.mark.slow
@@ -397,6 +420,16 @@ def test_bad_time_outs_are_named_before_connecting(options, words):
     """NaN was reported as a service that "does not speak the Dask protocol", −5 without a reason."""
     with pytest.raises(SpectralError, match=words):
         farm.render(small_scene(), scheduler="tcp://127.0.0.1:9", **options)
+
+
+def test_light_passes_and_the_spectrum_are_refused_before_any_dask_call():
+    no_cluster = farm.RenderFarm.__new__(farm.RenderFarm)
+    scene = small_scene()
+    with pytest.raises(SpectralError, match=r"a farm does not render light passes yet \(Emission\)"):
+        no_cluster.render(dataclasses.replace(scene, settings=dataclasses.replace(
+            scene.settings, passes=("Depth", "Emission"))))
+    with pytest.raises(SpectralError, match="a farm does not make the spectral image yet"):
+        no_cluster.render(dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spectrum=True)))
 
 
 def test_bad_overrides_are_refused_like_the_scenes_own_settings():
