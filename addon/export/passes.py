@@ -56,6 +56,8 @@ def spectrum_settings(scene) -> dict:
     s = scene.spectral
     return {"spectrum": bool(s.spectral_exr), "spectrum_start": float(s.spectral_exr_start),
             "spectrum_end": float(s.spectral_exr_end), "spectrum_step": float(s.spectral_exr_step)}
+
+
 def _toggled(view_layer, owner: str, toggle: str) -> bool:
     """Whether the View Layer's `toggle` (of its settings `owner`, "" for itself) is on; off where it has none."""
     settings = getattr(view_layer, owner, None) if owner else view_layer

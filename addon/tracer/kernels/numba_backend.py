@@ -721,6 +721,9 @@ def _path_spectrum(ks, n, path, sum_spectrum, row, column):
         b = int(spectrum_bin(edges, path.lam_cam[i]))
         if b >= 0:
             sum_spectrum[row, column, b] += spectrum_weight(edges, path.radiance[i], path.pdf_cam[i], n)
+
+
+@jit(inline="always")
 def _mark(n, path, index):
     """Take the camera path's mark `index` of its radiance (`light_split`): the next one it takes."""
     for i in range(n):
