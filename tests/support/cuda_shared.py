@@ -10,13 +10,14 @@ from pathlib import Path
 
 from addon.tracer import binned, phase, planck
 from addon.tracer.kernels import (
-    dda, envmap, fluorescent_reservoir, geometry, light_sampling, lookups, media, rng, surfaces, transparency)
+    dda, envmap, fluorescent_reservoir, geometry, light_sampling, light_split, lookups, media, rng, spectrum_bins,
+    surfaces, transparency)
 from addon.tracer.lowering import compile_scene
 from tests.support import scenes as s
 
 TRACER = Path(binned.__file__).parent
 MODULES = (lookups, geometry, media, light_sampling, envmap, surfaces, dda, rng, transparency, fluorescent_reservoir,
-           phase, binned, planck)
+           light_split, spectrum_bins, phase, binned, planck)
 
 
 def shared_in_sources():
@@ -114,6 +115,11 @@ def signatures(types=None, typeof=None):
         rng.sobol: (U, U),
         rng.low_discrepancy: (U, U, U),
         transparency.transparency_weight: (KS, F, F, I),
+        light_split.clamp_factor: (F, F, F, A2, F),
+        light_split.clamped_mark: (F, F, F, F),
+        light_split.direct_slot: (I,),
+        spectrum_bins.spectrum_bin: (A1, F),
+        spectrum_bins.spectrum_weight: (A1, F, F, I),
         fluorescent_reservoir.front_guide: (F,),
         fluorescent_reservoir.back_guide: (F,),
         fluorescent_reservoir.chosen_reservoir: (F,),

@@ -100,8 +100,8 @@ def test_the_film_sums_each_bands_mean_per_bin():
     first, second = rng.random((2, 2, 4, 5, 3))
     zeros = np.zeros((4, 5, 3))
     for band in range(2):
-        film.add(band, 0, 0, zeros, zeros, 2, None, first[band] * 2)
-    film.add(0, 1, 2, zeros[1:3, 2:5], zeros[1:3, 2:5], 4, None, second[0, 1:3, 2:5] * 4)
+        film.add(band, 0, 0, zeros, zeros, 2, sum_spectrum=first[band] * 2)
+    film.add(0, 1, 2, zeros[1:3, 2:5], zeros[1:3, 2:5], 4, sum_spectrum=second[0, 1:3, 2:5] * 4)
     expected = first.sum(axis=0)
     expected[1:3, 2:5] += (second[0, 1:3, 2:5] * 4 - first[0, 1:3, 2:5] * 4) / 6  # (2·a + 4·b)/6 − a
     np.testing.assert_allclose(film.spectrum, expected)
@@ -109,8 +109,8 @@ def test_the_film_sums_each_bands_mean_per_bin():
 
 
 def test_without_the_spectrum_the_kernel_adds_none():
-    """`render_unit` without `spectrum` gives the three accumulators only, and a render without bins a film
-    without a spectrum; the image does not change when the spectrum is kept."""
+    """A render without bins gives a film without a spectrum; the image does not change when the spectrum is
+    kept."""
     scene = s.scene(s.perspective_camera(4, 3), [s.medium(s.box_grid(), albedo=0.8)], [s.environment()], spp=4)
     plain = render(scene, backend="numpy").film
     kept = render(with_settings(scene, spectrum=True), backend="numpy").film

@@ -30,7 +30,7 @@ part, per wavelength band.
 Shared by both backends (`shared_math`). Part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`).
 """
 
-from ..shared_math import select, shared
+from ..shared_math import absolute, select, shared
 
 # The categories a camera path's light is split into, in the order of a film's light accumulator (its slots).
 EMISSION, ENVIRONMENT, VOLUME_DIRECT, VOLUME_INDIRECT, DIFFUSE_DIRECT, DIFFUSE_INDIRECT = range(6)
@@ -48,7 +48,7 @@ def clamp_factor(x, y, z, xyz_to_rgb, limit):
     r = xyz_to_rgb[0, 0] * x + xyz_to_rgb[0, 1] * y + xyz_to_rgb[0, 2] * z
     g = xyz_to_rgb[1, 0] * x + xyz_to_rgb[1, 1] * y + xyz_to_rgb[1, 2] * z
     b = xyz_to_rgb[2, 0] * x + xyz_to_rgb[2, 1] * y + xyz_to_rgb[2, 2] * z
-    total = abs(r) + abs(g) + abs(b)
+    total = absolute(r) + absolute(g) + absolute(b)
     return select((limit > 0.0) & (total > 3.0 * limit), 3.0 * limit / total, 1.0)
 
 

@@ -10,16 +10,14 @@ the spectrum, so the bands' means add up to the whole, and a bin outside a band'
 Shared by both backends (`shared_math`). Part of the kernel cache's key (`numba_cache.KERNEL_SOURCES`).
 """
 
-import numpy as np
-
-from ..shared_math import select, shared
+from ..shared_math import floor, select, shared
 
 
 @shared
 def spectrum_bin(edges, lam):
     """The index of the bin holding `lam` among the uniform bins of `edges` (at least two), as a float; -1 outside
     them all."""
-    index = np.floor((lam - edges[0]) / (edges[1] - edges[0]))
+    index = floor((lam - edges[0]) / (edges[1] - edges[0]))
     return select((index >= 0.0) & (index < edges.shape[0] - 1), index, -1.0)
 
 
