@@ -12,6 +12,8 @@ from ..tracer import colorimetry
 
 
 class CompositeFilm:
+    bins = 0  # no spectral image: the emulation makes none (`export.passes.without_light_passes`)
+
     def __init__(self, width: int, height: int):
         self.width, self.height = int(width), int(height)
         self.xyz = np.zeros((self.height, self.width, 3))
