@@ -84,7 +84,7 @@ def unmade_warning(view_layer) -> str | None:
 
 def without_light_passes(export, renderer: str):
     """`export` (an `Export`) for a renderer that makes the data passes (from the camera rays' first hits,
-    `tracer.render.first_hit_passes`) but no light passes and no spectral image (the Dask farm, the Cycles
+    `tracer.render.first_hit_passes`) but no light passes and no spectral image (the Cycles
     emulation): its scene asks for none of those, and a warning names those left out."""
     settings = export.scene.settings
     light = tuple(name for name in settings.passes if name not in DATA_PASSES)

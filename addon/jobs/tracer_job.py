@@ -9,7 +9,6 @@ missing anyway (the add-on run from a source checkout) the tracer reports what t
 
 import threading
 
-from ..export.passes import without_light_passes
 from ..export.scene import Export
 from ..tracer import render as local
 from ..tracer.errors import SpectralError
@@ -47,8 +46,6 @@ class TracerJob(Job):
     def for_export(cls, scene, export: Export, *, spp: int | None = None,
                    scheduler: str | None = None) -> "TracerJob":
         address = scene.spectral.scheduler_address if scheduler is None else scheduler
-        if address:
-            export = without_light_passes(export, f"the Dask farm at {address}")
         return cls(export.scene, address, spp=spp, warnings=export.warnings)
 
     def start(self) -> None:

@@ -136,9 +136,6 @@ def _check_options(args) -> None:
     if args.timeout is not None and not (math.isfinite(args.timeout) and 0 < args.timeout <= TIMEOUT_MAX):
         raise SpectralError(f"--timeout: must be a positive number of seconds, at most {TIMEOUT_MAX:g} (a day), "
                             f"found {args.timeout:g}")
-    if args.spectral_exr is not None and (args.scheduler is not None or args.workers is not None):
-        raise SpectralError("--spectral-exr: a render farm does not make the spectral image yet: render it on this "
-                            "computer (without --scheduler and --workers)")
     outputs = {"--out": (args.out, ".exr"), "--png": (args.png, ".png"), "--npy": (args.npy, ".npy"),
                "--spectral-exr": (args.spectral_exr, ".exr"), "--stats": (args.stats, None)}
     for path, suffix in outputs.values():

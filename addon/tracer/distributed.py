@@ -2,7 +2,8 @@
 what it answers with (`TaskResult`), and the fingerprint that says which code and data a result comes from.
 
 A task runs `render.render_unit` (a pure function of kernel scene, band, sample range, tile, seed and
-backend) and returns the tile's accumulators. It carries the fingerprint of what it must run
+backend) and returns the tile's accumulators: XYZ, its squares and the transparency, and where the render asks
+for them the light passes' and the spectral bins' (`SceneData` says which, for every task alike). It carries the fingerprint of what it must run
 (`fingerprint`: the tracer's sources, the numeric packages' versions, the scene data, seed and backend);
 the worker computes the fingerprint of what it runs, with its own code from its own copy of the scene, and
 returns it with the result, or alone when the two differ; the client (farm.py) keeps only results whose
@@ -28,22 +29,24 @@ PACKAGES = ("numpy", "numba", "llvmlite")  # their versions must match between c
 
 
 class SceneData:
-    """What is scattered to the workers: the kernel scene of each band.
+    """What is scattered to the workers: the kernel scene of each band, and what every task accumulates besides
+    XYZ: how many light categories (`light_passes.light_categories`; 0 for none) and whether the spectral bins.
 
     One picklable object rather than a list, so that pickling keeps the arrays the bands share
     (grids, majorants, light spectra) once instead of once per band. `digest()` hashes this copy (once per
     process: it is not pickled, so a worker hashes the copy it received)."""
 
-    def __init__(self, band_scenes):
+    def __init__(self, band_scenes, light_categories: int = 0, spectrum: bool = False):
         self.band_scenes = tuple(band_scenes)
+        self.light_categories, self.spectrum = int(light_categories), bool(spectrum)
 
     def __getstate__(self):
-        return {"band_scenes": self.band_scenes}
+        return {"band_scenes": self.band_scenes, "light_categories": self.light_categories, "spectrum": self.spectrum}
 
     def digest(self) -> str:
         if getattr(self, "_digest", None) is None:
             hasher = hashlib.blake2b(digest_size=32)
-            _hash_value(self.band_scenes, hasher, {})
+            _hash_value((self.band_scenes, self.light_categories, self.spectrum), hasher, {})
             self._digest = hasher.hexdigest()
         return self._digest
 
@@ -74,13 +77,12 @@ def fingerprint(environment_: dict, scene_digest: str, seed: int, backend: str) 
 
 class TaskResult(NamedTuple):
     """A task's answer: the fingerprint of what the worker ran (`fingerprint`), the worker, and the tile's
-    accumulators (None when the worker saw that its fingerprint is not the one asked for)."""
+    accumulators as `render.render_unit` returns them (None when the worker saw that its fingerprint is not the
+    one asked for)."""
 
     fingerprint: str
     worker: str
-    sum_xyz: np.ndarray | None
-    sum_sq: np.ndarray | None
-    sum_transparent: np.ndarray | None
+    sums: tuple[np.ndarray, ...] | None
 
 
 def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
@@ -90,10 +92,11 @@ def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile
     Thread counts do not change the result."""
     ran = fingerprint(environment(), scene_data.digest(), seed, backend)
     if ran != expected:
-        return TaskResult(ran, _worker_address(), None, None, None)
+        return TaskResult(ran, _worker_address(), None)
     backends.named(backend).kernels.set_threads(threads or _threads_per_task())
-    return TaskResult(ran, _worker_address(), *render.render_unit(scene_data.band_scenes[band], band, samples, tile,
-                                                                  seed, backend)[:3])
+    return TaskResult(ran, _worker_address(), render.render_unit(scene_data.band_scenes[band], band, samples, tile,
+                                                                 seed, backend, scene_data.light_categories,
+                                                                 scene_data.spectrum))
 
 
 def _worker_address() -> str:

@@ -33,7 +33,7 @@ from . import distributed as worker
 from .errors import SpectralError
 from .farm_plan import PassMerger, Unit, plan
 from .film import Film
-from .passes import DATA_PASSES
+from .light_passes import light_categories, light_images
 from .render import RenderResult, band_scenes, first_hit_passes, render_stats
 from .scene import Scene
 from .validation import check_settings
@@ -252,7 +252,7 @@ class RenderFarm:
         threads = self._threads_per_task(threads)
         self.wait_for_workers()
         self.check_environment()
-        scene_data = worker.SceneData(job.bands)
+        scene_data = worker.SceneData(job.bands, job.film.light_categories, job.film.bins > 0)
         expected = worker.fingerprint(worker.environment(), scene_data.digest(), job.seed, job.backend)
         [scene_future] = self.client.scatter([scene_data], broadcast=True, hash=False)
         setup_seconds = time.perf_counter() - start
@@ -273,7 +273,10 @@ class RenderFarm:
         # The data passes need no farm: the first hits of the camera rays, on this computer (`first_hit_passes`).
         passes = None if cancelled else first_hit_passes(scene, job.bands[0], job.spp, job.seed, job.backend, cancel)
         result = self._result(job, tasks, time.perf_counter() - start, setup_seconds, passes is None)
-        return dataclasses.replace(result, passes=passes) if passes is not None else result
+        if passes is None:
+            return result
+        passes.images.update(light_images(job.film, scene.settings))
+        return dataclasses.replace(result, passes=passes)
 
     def _threads_per_task(self, threads: int | None) -> int | None:
         """Kernel threads per task: `threads`, or on a local farm its cores shared among its workers (None:
@@ -361,13 +364,6 @@ class _Job:
     @classmethod
     def of(cls, scene: Scene, spp: int | None, seed: int | None, backend: str | None, tile_size: int) -> "_Job":
         settings = scene.settings
-        light = [name for name in settings.passes if name not in DATA_PASSES]
-        if light:
-            raise SpectralError(f"a farm does not render light passes yet ({', '.join(light)}): render them on this "
-                                "computer, or turn them off")
-        if settings.spectrum:
-            raise SpectralError("a farm does not make the spectral image yet (render.spectrum): render it on this "
-                                "computer, or turn it off")
         spp = settings.spp if spp is None else spp
         seed = settings.seed if seed is None else seed
         backend = backend or settings.backend
@@ -376,7 +372,9 @@ class _Job:
         bands = band_scenes(scene)
         camera = scene.camera
         sizes, tiles, units = plan(camera.width, camera.height, len(bands), spp, int(tile_size))
-        merger = PassMerger(Film(camera.width, camera.height, len(bands)), sizes, tiles)
+        film = Film(camera.width, camera.height, len(bands), light_categories(settings),
+                    bands[0].wavelengths.spectrum_edges)
+        merger = PassMerger(film, sizes, tiles)
         return cls(spp, seed, backend, int(tile_size), bands, units, merger)
 
     @property
@@ -444,7 +442,7 @@ class _Tasks:
                     raise self._refused_error()
                 self._resubmit(unit, attempt + 1)
                 continue
-            self.job.merger.add(unit, result.sum_xyz, result.sum_sq, result.sum_transparent)
+            self.job.merger.add(unit, *result.sums)
             self.work_done += unit.pixel_samples
             self.done += 1
         return True

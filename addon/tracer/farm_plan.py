@@ -63,13 +63,16 @@ class PassMerger:
     def __init__(self, film: Film, sizes: list[int], tiles: list[tuple[int, int, int, int]]):
         self.film, self.sizes, self.tiles = film, list(sizes), list(tiles)
         self.next_pass = [0] * film.bands
-        self.waiting: dict[tuple[int, int], dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
+        self.waiting: dict[tuple[int, int], dict[int, tuple[np.ndarray, ...]]] = {}
 
-    def add(self, unit: Unit, sum_xyz: np.ndarray, sum_sq: np.ndarray, sum_transparent: np.ndarray) -> None:
+    def add(self, unit: Unit, sum_xyz: np.ndarray, sum_sq: np.ndarray, sum_transparent: np.ndarray,
+            sum_light: np.ndarray | None = None, sum_spectrum: np.ndarray | None = None) -> None:
+        """Add a unit's accumulators (`render.render_unit`'s: the light categories' and the spectral bins' where
+        the film has them)."""
         if unit.pass_index < self.next_pass[unit.band]:
             raise ValueError(f"pass {unit.pass_index} of band {unit.band} was already added")
         arrived = self.waiting.setdefault((unit.band, unit.pass_index), {})
-        arrived[unit.tile_index] = (sum_xyz, sum_sq, sum_transparent)
+        arrived[unit.tile_index] = (sum_xyz, sum_sq, sum_transparent, sum_light, sum_spectrum)
         band = unit.band
         while self.next_pass[band] < len(self.sizes):
             parts = self.waiting.get((band, self.next_pass[band]))
@@ -78,8 +81,9 @@ class PassMerger:
             del self.waiting[(band, self.next_pass[band])]
             for tile_index in sorted(parts):
                 x0, y0, _, _ = self.tiles[tile_index]
-                xyz, squares, transparent = parts[tile_index]
-                self.film.add(band, y0, x0, xyz, squares, self.sizes[self.next_pass[band]], transparent)
+                xyz, squares, transparent, light, spectrum = parts[tile_index]
+                self.film.add(band, y0, x0, xyz, squares, self.sizes[self.next_pass[band]], transparent, light,
+                              spectrum)
             self.next_pass[band] += 1
 
     @property

@@ -161,18 +161,21 @@ def test_the_passes_panel_offers_only_the_passes_the_engine_makes(registered):
 
 
 @pytest.mark.parametrize("renderer", ["farm", "emulation"])
-def test_a_farm_and_the_emulation_make_the_data_passes_and_name_the_light_passes_they_leave_out(registered,
-                                                                                                 renderer):
+def test_a_farm_makes_every_pass_and_the_emulation_names_the_light_passes_it_leaves_out(registered, renderer):
     from addon.jobs.kinds import render_job
 
     scene, _ = surfaces_scene()
     scene.view_layers[0].use_pass_emit = True
     export = export_scene(bpy.context.evaluated_depsgraph_get())
-    if renderer == "emulation":
-        scene.spectral.renderer = "CYCLES"
-    job = render_job(scene, export, scheduler="tcp://127.0.0.1:1" if renderer == "farm" else None)
-    kept = job.scene.settings.passes if renderer == "farm" else job._tracer_scene.settings.passes
-    assert kept == ("Depth", "Mist", "Normal", "CryptoObject", "CryptoMaterial")  # made from the first hits
+    data = ("Depth", "Mist", "Normal", "CryptoObject", "CryptoMaterial")  # made from the first hits
+    if renderer == "farm":
+        job = render_job(scene, export, scheduler="tcp://127.0.0.1:1")
+        assert job.scene.settings.passes == (*data, "Emission")  # the farm's tasks sum the light passes too
+        assert not any("light passes" in w for w in job.warnings)
+        return
+    scene.spectral.renderer = "CYCLES"
+    job = render_job(scene, export)
+    assert job._tracer_scene.settings.passes == data
     warning = next(w for w in job.warnings if "does not render light passes" in w)
     assert warning.endswith("yet: Emission left out of the render")
 

@@ -20,5 +20,7 @@ def assert_same_film(expected: Film, actual: Film):
     assert np.array_equal(expected.sum_xyz, actual.sum_xyz)
     assert np.array_equal(expected.sum_sq, actual.sum_sq)
     assert np.array_equal(expected.sum_transparent, actual.sum_transparent)
+    assert np.array_equal(expected.sum_light, actual.sum_light)
+    assert np.array_equal(expected.sum_spectrum, actual.sum_spectrum)
     assert np.array_equal(expected.xyz, actual.xyz)
     assert np.array_equal(expected.variance, actual.variance)

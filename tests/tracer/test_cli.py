@@ -146,8 +146,6 @@ BAD_OPTIONS = {
     "in /proc": (["--out", "/proc/o.exr"], "cannot write /proc/o.exr: "),
     "png in /proc": (["--png", "/proc/o.png"], "cannot write /proc/o.png: "),
     "stats in /proc": (["--stats", "/proc/stats.json"], "cannot write /proc/stats.json: "),
-    "spectral exr on a farm": (["--workers", 1, "--spectral-exr", "{tmp}/s.exr"],
-                               "--spectral-exr: a render farm does not make the spectral image yet"),
     "spectral exr as a png": (["--spectral-exr", "{tmp}/s.png"], "s.png: the file is written as EXR"),
 }
 

@@ -13,11 +13,11 @@ def test_a_result_is_refused_unless_its_fingerprint_is_the_tasks(monkeypatch):
     data = distributed.SceneData(single.band_scenes(small_scene()))
     mine = distributed.fingerprint(distributed.environment(), data.digest(), 11, "numpy")
     ran = distributed.render_task(data, 0, (0, 1), (0, 0, 2, 2), 11, "numpy", expected=mine)
-    assert ran.fingerprint == mine and ran.sum_xyz.shape == (2, 2, 3)
+    assert ran.fingerprint == mine and ran.sums[0].shape == (2, 2, 3)
     other = distributed.render_task(data, 0, (0, 1), (0, 0, 2, 2), 12, "numpy", expected=mine)
-    assert other.fingerprint != mine and other.sum_xyz is None
+    assert other.fingerprint != mine and other.sums is None
     monkeypatch.setattr(distributed, "sources_digest", lambda: "other sources")
-    assert distributed.render_task(data, 0, (0, 1), (0, 0, 2, 2), 11, "numpy", expected=mine).sum_xyz is None
+    assert distributed.render_task(data, 0, (0, 1), (0, 0, 2, 2), 11, "numpy", expected=mine).sums is None
     copy = pickle.loads(pickle.dumps(data))
     assert getattr(copy, "_digest", None) is None and copy.digest() == data.digest()
 

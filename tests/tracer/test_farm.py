@@ -228,6 +228,22 @@ def test_a_farm_makes_the_data_passes_as_one_process_does(loopback):
 
 
 @pytest.mark.slow
+def test_a_farm_makes_the_light_passes_and_the_spectrum_as_one_process_does(loopback):
+    """The light passes' and the spectral bins' sums travel with each task's XYZ and are merged in pass order: the
+    same film, bit for bit, and the same pass images."""
+    scene = small_scene(spp=6, bands=2)
+    scene = dataclasses.replace(scene, settings=dataclasses.replace(
+        scene.settings, passes=("Emission", "Environment", "Volume Direct", "Volume Indirect"), spectrum=True))
+    expected = single.render(scene)
+    assert expected.film.light_categories and expected.film.bins and expected.film.sum_spectrum.any()
+    result = farm.render(scene, scheduler=loopback.address, tile_size=5)
+    assert_same_film(expected.film, result.film)
+    assert set(result.passes.images) == set(expected.passes.images) >= {"Environment", "Volume Direct"}
+    for name, image in expected.passes.images.items():
+        np.testing.assert_array_equal(result.passes.images[name], image)
+
+
+@pytest.mark.slow
 def test_cancel_stops_between_tasks_with_whole_passes(reference, loopback):
     scene, expected = reference
     result = farm.render(scene, scheduler=loopback.address, tile_size=5, spp=200,
@@ -420,16 +436,6 @@ def test_bad_time_outs_are_named_before_connecting(options, words):
     """NaN was reported as a service that "does not speak the Dask protocol", −5 without a reason."""
     with pytest.raises(SpectralError, match=words):
         farm.render(small_scene(), scheduler="tcp://127.0.0.1:9", **options)
-
-
-def test_light_passes_and_the_spectrum_are_refused_before_any_dask_call():
-    no_cluster = farm.RenderFarm.__new__(farm.RenderFarm)
-    scene = small_scene()
-    with pytest.raises(SpectralError, match=r"a farm does not render light passes yet \(Emission\)"):
-        no_cluster.render(dataclasses.replace(scene, settings=dataclasses.replace(
-            scene.settings, passes=("Depth", "Emission"))))
-    with pytest.raises(SpectralError, match="a farm does not make the spectral image yet"):
-        no_cluster.render(dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, spectrum=True)))
 
 
 def test_bad_overrides_are_refused_like_the_scenes_own_settings():
