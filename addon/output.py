@@ -68,14 +68,18 @@ def passes(film, region: Region | None = None, denoised: bool = False) -> Passes
     rendered = Passes(film.xyz, rgb, film.variance, film.alpha)
     if region is None:
         return rendered
+    return Passes(*(placed(image, region) for image in rendered))
+
+
+def placed(image: np.ndarray, region: Region | None, fill: float = 0.0) -> np.ndarray:
+    """`image` (the film's rows and columns first) placed at `region` in a frame of `fill`, as Blender places a
+    Render Region that is not cropped; `image` itself without a region."""
+    if region is None:
+        return image
     top = region.full_height - region.y - region.height  # Region counts rows from the bottom
-
-    def placed(image):
-        frame = np.zeros((region.full_height, region.full_width) + image.shape[2:], dtype=image.dtype)
-        frame[top:top + region.height, region.x:region.x + region.width] = image
-        return frame
-
-    return Passes(*map(placed, rendered))
+    frame = np.full((region.full_height, region.full_width) + image.shape[2:], fill, dtype=image.dtype)
+    frame[top:top + region.height, region.x:region.x + region.width] = image
+    return frame
 
 
 def render_result(result, film, preview: bool = False) -> None:
@@ -118,19 +122,21 @@ def spectral_exr_path(scene, frame: int, animation: bool = False) -> str:
     return os.path.splitext(path)[0] + SPECTRAL_SUFFIX
 
 
-def write_spectral_exr(scene, film, tracer_scene, animation: bool = False) -> str:
+def write_spectral_exr(scene, film, tracer_scene, animation: bool = False, region: Region | None = None) -> str:
     """Render ▸ Passes ▸ Spectral EXR: the film's spectral image written next to the render output of the scene's
-    current frame (`spectral_exr_path`); returns its path."""
+    current frame (`spectral_exr_path`), placed at `region` as the image is (`placement`); returns its path."""
     path = spectral_exr_path(scene, scene.frame_current, animation)
-    image_io.write_all([spectral_exr(path, film, tracer_scene)])
+    image_io.write_all([spectral_exr(path, film, tracer_scene, region)])
     return path
 
 
-def spectral_exr(path, film, tracer_scene) -> image_io.Output:
+def spectral_exr(path, film, tracer_scene, region: Region | None = None) -> image_io.Output:
     """The film's spectral image (`Film.spectrum`) as an EXR in the layout of Fichet et al. 2021, with its linear
-    Rec.709 RGB and alpha beside it, in the radiance units of `tracer_scene`'s sources (`spectral_film`)."""
-    return image_io.spectral_exr(bpy.path.abspath(str(path)), film.spectrum, film.spectrum_edges,
-                                 spectral_film.radiance_units(tracer_scene), film.rgb(), film.alpha)
+    Rec.709 RGB and alpha beside it, in the radiance units of `tracer_scene`'s sources (`spectral_film`); placed at
+    `region` in a frame of zeros (alpha 0) as the render's image is (`placement`)."""
+    return image_io.spectral_exr(bpy.path.abspath(str(path)), placed(film.spectrum, region),
+                                 film.spectrum_edges, spectral_film.radiance_units(tracer_scene),
+                                 placed(film.rgb(), region), placed(film.alpha, region))
 
 
 def data_passes(data: PassImages, region: Region | None = None) -> PassImages:
@@ -138,13 +144,7 @@ def data_passes(data: PassImages, region: Region | None = None) -> PassImages:
     Depth 1e10 (no surface), every other pass 0."""
     if region is None:
         return data
-    top = region.full_height - region.y - region.height
-    images = {}
-    for name, image in data.images.items():
-        fill = NO_HIT_DEPTH if name == DEPTH else 0.0
-        frame = np.full((region.full_height, region.full_width) + image.shape[2:], fill, dtype=image.dtype)
-        frame[top:top + region.height, region.x:region.x + region.width] = image
-        images[name] = frame
+    images = {name: placed(image, region, NO_HIT_DEPTH if name == DEPTH else 0.0) for name, image in data.images.items()}
     return PassImages(images, data.mattes)
 
 

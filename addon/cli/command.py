@@ -178,7 +178,8 @@ def _render_frame(scene, frame: int, args, written: list) -> str:
         if not result.film.bins:
             raise SpectralError(f"--spectral-exr: the {job.describe()} does not make the spectral image yet: render "
                                 "with the tracer on this computer")
-        outputs.append(output.spectral_exr(frame_path(args.spectral_exr, frame), result.film, export.scene))
+        outputs.append(output.spectral_exr(frame_path(args.spectral_exr, frame), result.film, export.scene,
+                                           region))
     paths = image_io.write_all(outputs)
     written += paths
     spp = scene.spectral.samples if args.spp is None else args.spp

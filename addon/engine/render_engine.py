@@ -118,7 +118,8 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
                 self.update_result(result)
                 self._denoise(result, job.result.film, settings)
                 if job.result.film.bins and not self.is_preview:
-                    path = output.write_spectral_exr(original, job.result.film, scene, self.is_animation)
+                    path = output.write_spectral_exr(original, job.result.film, scene, self.is_animation,
+                                                     output.placement(original))
                     self.report({"INFO"}, f"Spectral EXR written: {path}")
             except SpectralError as error:  # Open Image Denoise failed, or the spectral EXR could not be written
                 problem = str(error)

@@ -79,7 +79,8 @@ class SPECTRAL_OT_render_image(bpy.types.Operator):
             image = write_outputs(job.result.film, self.image_name, self.exr_path, context.view_layer.name,
                                   self._region, denoised, job.result.passes)
             if job.result.film.bins:
-                path = write_spectral_exr(context.scene, job.result.film, self._tracer_scene)
+                path = write_spectral_exr(context.scene, job.result.film, self._tracer_scene,
+                                          region=self._region)
                 self.report({"INFO"}, f"Spectral EXR written: {path}")
         except SpectralError as problem:
             self.report({"ERROR"}, f"Render not saved: {problem}")

@@ -70,6 +70,28 @@ def test_render_to_image_writes_it_next_to_the_render_output_too(registered, tmp
     assert len(names) == 40 and channels[names[0]].shape == (6, 8)
 
 
+def test_a_render_region_is_placed_in_the_full_frame_as_the_image_is(registered, tmp_path):
+    """Render Region with Crop off: the spectral EXR is the full frame, the region's spectrum where the image has the
+    region, zeros (alpha 0) around it, as Render to Image's EXR."""
+    scene, _ = surfaces_scene(16, 12)
+    render = scene.render
+    render.engine = "SPECTRAL_VOLUME"
+    scene.spectral.spectral_exr = True
+    render.filepath = str(tmp_path / "region")
+    render.use_border, render.use_crop_to_border = True, False
+    render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y = 0.25, 0.75, 0.1, 0.6
+    assert bpy.ops.spectral.render_image(image_name="Spectral", exr_path=str(tmp_path / "image.exr")) == {"FINISHED"}
+    names, channels, _ = spectral_channels(tmp_path / "region_spectral.exr")
+    image = image_io.read_exr(tmp_path / "image.exr")
+    alpha = image["ViewLayer.Combined.A"]
+    assert channels["A"].shape == alpha.shape == (12, 16)
+    np.testing.assert_allclose(channels["A"], alpha, rtol=1e-6)
+    outside = alpha == 0.0
+    assert outside.any() and not outside.all()  # the region, and the frame around it
+    spectrum = np.stack([channels[name] for name in names], axis=2)
+    assert not spectrum[outside].any() and spectrum[~outside].mean() > 0
+
+
 def test_the_blend_command_line_writes_the_spectral_exr(registered, tmp_path):
     """Frame placeholders as in --out; Blender's own sun (its Watts) and World are radiant, so the units are
     absolute."""
