@@ -86,7 +86,8 @@ def _object_parts(instance, depsgraph, volume_owners, originals: bool, notes: No
     material = volume_material(obj, depsgraph) if is_volume or obj.type == "MESH" else None
     holdout = held_out(instance, depsgraph.view_layer, notes)
     if holdout and material is not None:
-        notes.add(f"object {obj.name!r}: Holdout of a volume not rendered (the volume renders as it is)")
+        notes.add(f"object {obj.name!r}: Holdout has no effect on a volume, in Cycles as here: the volume renders as "
+                  "it is")
     if material is None:
         if is_volume:
             names = [material.name for material in materials(obj, depsgraph)]
