@@ -10,8 +10,8 @@ from pathlib import Path
 
 from addon.tracer import binned, phase, planck
 from addon.tracer.kernels import (
-    dda, envmap, estimator, fluorescent_reservoir, geometry, light_sampling, light_split, lookups, media, rng, spectrum_bins,
-    surfaces, transparency)
+    dda, envmap, estimator, fluorescent_reservoir, geometry, light_sampling, light_split, lookups, media, rng,
+    spectrum_bins, surfaces, transparency)
 from addon.tracer.lowering import compile_scene
 from tests.support import scenes as s
 

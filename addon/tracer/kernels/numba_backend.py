@@ -246,16 +246,13 @@ PHASE, CELL, STEP, TRACKER_INTS = 0, 1, 4, 7
 BEFORE, INSIDE, DONE = 0, 1, 2  # phases: the ray has not entered the block grid yet, is in it, has left
 T_ENTRY, T_EXIT, T_NEXT, T_DELTA, ORIGIN, DIRECTION, CONTROL, DEPTH, EXCESS, TRACKER_FLOATS = (
     0, 1, 2, 5, 11, 14, 17, 18, 19, 20)
-# The current segment of the ray (`Tracker.segment`): where it ends and the rate tentative collisions are drawn at on
-# it, kept from one tentative collision to the next; STALE at its end (its blocks have changed).
-SEGMENT_END, SEGMENT_RATE, STALE = 0, 1, -1.0
+STALE = -1.0  # the end of a ray's segment that `_tentative_collision` has yet to look up
 
 
 @jit(inline="always")
 def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, tracker):
     """Start every medium's DDA for the ray o + t·d, t in [t_min, t_max]."""
     state_i, state_f = tracker.state_i, tracker.state_f
-    tracker.segment[SEGMENT_END] = STALE
     for m in range(ks.media.density_scale.shape[0]):
         w2p = ks.density.world_to_padded[m]
         lox, loy, loz = transform_point(w2p, ox, oy, oz)
@@ -359,32 +356,30 @@ def _tracker_advance(ks, tracker, t_end):
 
 
 @jit(inline="always")
-def _tentative_collision(ks, stream, tracker, t, controls, residual):
+def _tentative_collision(ks, stream, tracker, t, t_end, rate, controls, residual):
     """The one tracking loop, of free flights (`_free_flight`) and shadow rays (`_transmittance`): from ray
-    parameter t to the next tentative collision, (t, the rate it was drawn at), or (INF, 0) when the ray leaves
-    every medium (or passes the tracker's t_max). The rate is the majorant σ̄, or with `residual` σ̄ less the
-    controls' share (the residual majorant of residual ratio tracking). With `controls`, the controls are
-    integrated along the way (`_integrate_controls`). A segment's end and rate are looked up once
-    (`_tracker_segment`) and kept in `tracker.segment` until the ray leaves it."""
-    segment = tracker.segment
+    parameter t on the current segment (ending at t_end, tentative collisions drawn at `rate` on it; t_end
+    STALE: not looked up yet) to the next tentative collision. Returns (t, t_end, rate) there, for the next
+    call to go on from, or (INF, INF, 0) when the ray leaves every medium (or passes the tracker's t_max).
+    The rate is the majorant σ̄, or with `residual` σ̄ less the controls' share (the residual majorant of residual
+    ratio tracking). With `controls`, the controls are integrated along the way (`_integrate_controls`). Each
+    segment is looked up once (`_tracker_segment`), and its end and rate stay in the caller's variables."""
     while True:
-        if segment[SEGMENT_END] == STALE:
+        if t_end == STALE:
             t_end, sigma_bar, control_rate = _tracker_segment(ks, tracker, controls)
-            segment[SEGMENT_END] = t_end
-            segment[SEGMENT_RATE] = sigma_bar - control_rate if residual else sigma_bar
-        t_end, rate = segment[SEGMENT_END], segment[SEGMENT_RATE]
+            rate = sigma_bar - control_rate if residual else sigma_bar
         if t_end == INF:
-            return INF, 0.0
+            return INF, INF, 0.0
         t_next = t_end
         if rate > 0.0:
             t_next = min(t + free_path(_next(stream), rate), t_end)
         if controls:
             _integrate_controls(ks, tracker, t_next - t)
         if t_next < t_end:
-            return t_next, rate
+            return t_next, t_end, rate
         t = t_end
         _tracker_advance(ks, tracker, t_end)
-        segment[SEGMENT_END] = STALE
+        t_end = STALE
 
 
 # ----------------------------------------------------------------------------- phase functions
@@ -615,9 +610,8 @@ Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s med
 # transmittance and the unidirectional strategy's survival along the shadow ray (`_transmittance`), and
 # the strategies' ratios summed (`estimator.light_sample_ratio`, `estimator.hit_light_ratio`).
 LightSample = namedtuple("LightSample", "radiance phase transmittance survival r_l")
-# One majorant DDA per medium (`_tracker_*`): integer and float state per medium; and the ray's current segment
-# (`_tentative_collision`: its end and rate).
-Tracker = namedtuple("Tracker", "state_i state_f segment")
+# One majorant DDA per medium (`_tracker_*`): integer and float state per medium.
+Tracker = namedtuple("Tracker", "state_i state_f")
 # The fluorescent branch (`_offer_fluorescence`, `fluorescent_reservoir`): per reservoir (unguided, front,
 # back) its total weight, its collision, each camera wavelength's share of the collision's weight, its
 # medium and vertex depth, and its dye optical depth; the dye optical depth along the current segment; the
@@ -663,7 +657,7 @@ def _new_hit():
 
 @jit(inline="always")
 def _new_tracker(media):
-    return Tracker(np.zeros((media, TRACKER_INTS), dtype=np.int64), np.zeros((media, TRACKER_FLOATS)), np.zeros(2))
+    return Tracker(np.zeros((media, TRACKER_INTS), dtype=np.int64), np.zeros((media, TRACKER_FLOATS)))
 
 
 # ----------------------------------------------------------------------------- camera and film
@@ -884,9 +878,9 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
     for m in range(ks.media.density_scale.shape[0]):
         state_f[m, CONTROL] = 0.0  # no control: plain ratio tracking
         state_f[m, DEPTH] = 0.0
-    t = 0.0
+    t, t_end, rate = 0.0, STALE, 0.0
     while True:
-        t, rate = _tentative_collision(ks, path.stream, tracker, t, residual, residual)
+        t, t_end, rate = _tentative_collision(ks, path.stream, tracker, t, t_end, rate, residual, residual)
         if t == INF:
             break
         px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
@@ -996,10 +990,10 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, 
         for m in range(ks.media.density_scale.shape[0]):
             tracker.state_f[m, DEPTH] = 0.0
     fl.tau[0] = 0.0
-    t = 0.0
+    t, t_end, sigma_bar = 0.0, STALE, 0.0
     t_light, seen = _next_area_light(ks, ox, oy, oz, dx, dy, dz, 0.0, -1, t_max)
     while True:
-        t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t, controls, False)
+        t, t_end, sigma_bar = _tentative_collision(ks, path.stream, tracker, t, t_end, sigma_bar, controls, False)
         while t > t_light:
             _area_light_seen(ks, seen, ox, oy, oz, dx, dy, dz, t_light, scattered, n, path, light)
             t_light, seen = _next_area_light(ks, ox, oy, oz, dx, dy, dz, t_light, seen, t_max)

@@ -39,9 +39,10 @@ from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
 from .estimator import (
-    attenuates_alike, camera_estimate, collision_estimate, companion_uniform, controls_transmittance, hit_light_contribution, hit_light_ratio,
-    lambert_sampled, light_sample_ratio, next_event_contribution, null_collision, phase_sampled, ratio_tracked,
-    real_collision, real_probability, residual_tracked, roulette_survival, shadow_bound, shadow_roulette)
+    attenuates_alike, camera_estimate, collision_estimate, companion_uniform, controls_transmittance,
+    hit_light_contribution, hit_light_ratio, lambert_sampled, light_sample_ratio, next_event_contribution,
+    null_collision, phase_sampled, ratio_tracked, real_collision, real_probability, residual_tracked,
+    roulette_survival, shadow_bound, shadow_roulette)
 from .geometry import camera_depths, camera_ray, normalize, transform_point, transform_vector
 from .layout import LIGHT_AREA, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SURFACE_OFFSET
 from .light_sampling import (
