@@ -10,14 +10,14 @@ from pathlib import Path
 
 from addon.tracer import binned, phase, planck
 from addon.tracer.kernels import (
-    dda, envmap, fluorescent_reservoir, geometry, light_sampling, light_split, lookups, media, rng, spectrum_bins,
-    surfaces, transparency)
+    dda, envmap, estimator, fluorescent_reservoir, geometry, light_sampling, light_split, lookups, media, rng,
+    spectrum_bins, surfaces, transparency)
 from addon.tracer.lowering import compile_scene
 from tests.support import scenes as s
 
 TRACER = Path(binned.__file__).parent
 MODULES = (lookups, geometry, media, light_sampling, envmap, surfaces, dda, rng, transparency, fluorescent_reservoir,
-           light_split, spectrum_bins, phase, binned, planck)
+           light_split, spectrum_bins, estimator, phase, binned, planck)
 
 
 def shared_in_sources():
@@ -43,7 +43,7 @@ def signatures(types=None, typeof=None):
         from numba import types, typeof
     ks = kernel_scene()
     KS = typeof(ks)
-    F, I, U = types.float64, types.int64, types.uint64
+    F, I, U, B = types.float64, types.int64, types.uint64, types.boolean
     A1, A2 = types.float64[::1], types.float64[:, ::1]
     AT = types.Tuple((I, F, types.boolean))  # a wavelength located on the grid (`on_grid`)
     V3 = types.UniTuple(F, 3)
@@ -120,6 +120,25 @@ def signatures(types=None, typeof=None):
         light_split.direct_slot: (I,),
         spectrum_bins.spectrum_bin: (A1, F),
         spectrum_bins.spectrum_weight: (A1, F, F, I),
+        estimator.companion_uniform: (F, I, I),
+        estimator.camera_estimate: (F, F, I),
+        estimator.collision_estimate: (F, F, F),
+        estimator.real_probability: (F, F, F),
+        estimator.real_collision: (F, F, F, F, F, F),
+        estimator.null_collision: (F, F, F, F, F, F, F, B),
+        estimator.ratio_tracked: (F, F, F, F, B),
+        estimator.controls_transmittance: (F,),
+        estimator.residual_tracked: (F, F),
+        estimator.shadow_bound: (F, F),
+        estimator.shadow_roulette: (F, F),
+        estimator.attenuates_alike: (F, F),
+        estimator.light_sample_ratio: (F, F, F, F, B),
+        estimator.next_event_contribution: (F, F, F, F, F),
+        estimator.hit_light_ratio: (F, F, F, F, B),
+        estimator.hit_light_contribution: (F, F, F, B, F),
+        estimator.phase_sampled: (F, F, F, F),
+        estimator.lambert_sampled: (F, F, F, F),
+        estimator.roulette_survival: (F,),
         fluorescent_reservoir.front_guide: (F,),
         fluorescent_reservoir.back_guide: (F,),
         fluorescent_reservoir.chosen_reservoir: (F,),

@@ -38,16 +38,17 @@ the same stages as the NumPy backend's wavefront: `_sample_wavelengths` and `geo
 `_next_event`, `_sample_phase` or `_sample_lambert`, `_survives_roulette`; then `_start_fluorescent_branch` for each
 fluorescent sub-path), then `_path_xyz`. A path's state is named (`Path`, `Coefficients`, `LightSample`, `Tracker`,
 `Fluorescent`, `Hit`). The physics at a point (look-ups, coefficients, phase functions, lights, surfaces, free paths,
-the DDA's arithmetic) is the shared arithmetic that the NumPy backend calls on arrays (docs/algorithm.md); this module
-holds the path's loops and state, and the estimator's arithmetic on them (weight and MIS-ratio updates,
-contributions, roulette). Every function below `_render_samples`, shared ones included, is inlined into it,
+the DDA's arithmetic) and the estimator's per-wavelength arithmetic (`estimator`: weight and MIS-ratio updates,
+collision estimates, contributions, roulettes) are the shared arithmetic that the NumPy backend calls on arrays
+(docs/algorithm.md); this module holds the path's loops, masks and state, and one tracking loop,
+`_tentative_collision`, which free flights and shadow rays share. Every function below `_render_samples`, shared ones
+included, is inlined into it,
 and the kernel scene's arrays are borrowed (`_borrowed`): a call that takes the scene costs nothing, where Numba would
 otherwise update the reference count of each of its ~40 arrays (atomic operations that threads contend for) on every
 call. The arrays sit in the scene's nested groups (`layout.KernelScene`), all of which `_borrowed` borrows.
 """
 
 import functools
-import math
 from collections import namedtuple
 
 import numpy as np
@@ -60,15 +61,18 @@ from ..phase import INV_FOUR_PI, hg_sample_cos, rayleigh_sample_cos, sample_dire
 from ..planck import planck_radiance
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
+from .estimator import (
+    attenuates_alike, camera_estimate, collision_estimate, companion_uniform, controls_transmittance,
+    hit_light_contribution, hit_light_ratio, lambert_sampled, light_sample_ratio, next_event_contribution,
+    null_collision, phase_sampled, ratio_tracked, real_collision, real_probability, residual_tracked,
+    roulette_survival, shadow_bound, shadow_roulette)
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
     BVH_MAX_DEPTH,
-    GREY_SPREAD,
     LIGHT_AREA,
     MAX_WAVELENGTHS_PER_PATH,
     PHASE_RAYLEIGH,
     SHADOW_ROULETTE_BELOW,
-    SHADOW_ROULETTE_STOP,
     SURFACE_OFFSET,
     KernelScene,
 )
@@ -242,6 +246,7 @@ PHASE, CELL, STEP, TRACKER_INTS = 0, 1, 4, 7
 BEFORE, INSIDE, DONE = 0, 1, 2  # phases: the ray has not entered the block grid yet, is in it, has left
 T_ENTRY, T_EXIT, T_NEXT, T_DELTA, ORIGIN, DIRECTION, CONTROL, DEPTH, EXCESS, TRACKER_FLOATS = (
     0, 1, 2, 5, 11, 14, 17, 18, 19, 20)
+STALE = -1.0  # the end of a ray's segment that `_tentative_collision` has yet to look up
 
 
 @jit(inline="always")
@@ -351,23 +356,30 @@ def _tracker_advance(ks, tracker, t_end):
 
 
 @jit(inline="always")
-def _tentative_collision(ks, stream, tracker, t, controls):
-    """Delta tracking from ray parameter t: the next tentative collision (t, σ̄ there), or (INF, 0)
-    when the ray leaves every medium (or passes the tracker's t_max). With `controls`, the controls are
-    integrated along the way (`_integrate_controls`)."""
+def _tentative_collision(ks, stream, tracker, t, t_end, rate, controls, residual):
+    """The one tracking loop, of free flights (`_free_flight`) and shadow rays (`_transmittance`): from ray
+    parameter t on the current segment (ending at t_end, tentative collisions drawn at `rate` on it; t_end
+    STALE: not looked up yet) to the next tentative collision. Returns (t, t_end, rate) there, for the next
+    call to go on from, or (INF, INF, 0) when the ray leaves every medium (or passes the tracker's t_max).
+    The rate is the majorant σ̄, or with `residual` σ̄ less the controls' share (the residual majorant of residual
+    ratio tracking). With `controls`, the controls are integrated along the way (`_integrate_controls`). Each
+    segment is looked up once (`_tracker_segment`), and its end and rate stay in the caller's variables."""
     while True:
-        t_end, sigma_bar, _ = _tracker_segment(ks, tracker, controls)
+        if t_end == STALE:
+            t_end, sigma_bar, control_rate = _tracker_segment(ks, tracker, controls)
+            rate = sigma_bar - control_rate if residual else sigma_bar
         if t_end == INF:
-            return INF, 0.0
+            return INF, INF, 0.0
         t_next = t_end
-        if sigma_bar > 0.0:
-            t_next = min(t + free_path(_next(stream), sigma_bar), t_end)
+        if rate > 0.0:
+            t_next = min(t + free_path(_next(stream), rate), t_end)
         if controls:
             _integrate_controls(ks, tracker, t_next - t)
         if t_next < t_end:
-            return t_next, sigma_bar
+            return t_next, t_end, rate
         t = t_end
         _tracker_advance(ks, tracker, t_end)
+        t_end = STALE
 
 
 # ----------------------------------------------------------------------------- phase functions
@@ -542,15 +554,12 @@ def _add_hit_light(scattered, survival, light_pdf, n, path, light):
     scattering vertex, MIS-weighted against light sampling of pdf `light_pdf` (the light's choice included),
     with the path's `survival` along the ray as a shadow ray would have given it (`_transmittance`: 1 where
     `r_l` has the null-event probabilities)."""
-    if not scattered:
-        mean_r, weight = _mean(path.r_u, n), 1.0
-    else:
-        for i in range(n):
-            light.r_l[i] = path.r_u[i] * survival + path.r_l[i] * light_pdf
-        mean_r, weight = _mean(light.r_l, n), survival
+    for i in range(n):
+        light.r_l[i] = hit_light_ratio(path.r_u[i], path.r_l[i], survival, light_pdf, scattered)
+    mean_r = _mean(light.r_l, n)
     if mean_r > 0.0:
         for i in range(n):
-            path.radiance[i] += path.beta[i] * light.radiance[i] * weight / mean_r
+            path.radiance[i] += hit_light_contribution(path.beta[i], light.radiance[i], survival, scattered, mean_r)
 
 
 @jit(inline="always")
@@ -581,8 +590,7 @@ def _sample_lambert(n, path, hit):
         return 0.0, 0.0, 0.0
     nx, ny, nz = sample_direction((hit.normal[0], hit.normal[1], hit.normal[2]), cos_theta, u2)
     for i in range(n):
-        path.r_l[i] = path.r_u[i] / pdf0
-        path.beta[i] *= hit.reflectance[i]
+        path.beta[i], path.r_u[i], path.r_l[i] = lambert_sampled(path.beta[i], path.r_u[i], hit.reflectance[i], pdf0)
     return normalize(nx, ny, nz)
 
 
@@ -600,8 +608,8 @@ Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radianc
 Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s medium_fl dye")
 # Next-event estimation's per-wavelength values: the light's radiance, the phase function, ratio-tracked
 # transmittance and the unidirectional strategy's survival along the shadow ray (`_transmittance`), and
-# the MIS sums.
-LightSample = namedtuple("LightSample", "radiance phase transmittance survival r_l r_u")
+# the strategies' ratios summed (`estimator.light_sample_ratio`, `estimator.hit_light_ratio`).
+LightSample = namedtuple("LightSample", "radiance phase transmittance survival r_l")
 # One majorant DDA per medium (`_tracker_*`): integer and float state per medium.
 Tracker = namedtuple("Tracker", "state_i state_f")
 # The fluorescent branch (`_offer_fluorescence`, `fluorescent_reservoir`): per reservoir (unguided, front,
@@ -631,7 +639,7 @@ def _new_coefficients(media):
 @jit(inline="always")
 def _new_light_sample():
     return LightSample(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
-                       np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS))
+                       np.empty(MAX_LAMBDAS))
 
 
 @jit(inline="always")
@@ -660,9 +668,7 @@ def _sample_wavelengths(ks, n, path):
     (stratified inverse CDF), with fresh weights."""
     u = _next(path.stream)
     for i in range(n):
-        ui = u + i / n
-        ui -= math.floor(ui)
-        path.lam_cam[i] = sample_binned(ks.wavelengths.cdf, ui)
+        path.lam_cam[i] = sample_binned(ks.wavelengths.cdf, companion_uniform(u, i, n))
         path.pdf_cam[i] = pdf_binned(ks.wavelengths.pdf, path.lam_cam[i])
         path.lams[i] = path.lam_cam[i]
         path.beta[i] = 1.0
@@ -701,7 +707,7 @@ def _spectrum_xyz(ks, n, path, mark):
         value = path.radiance[i] if mark < 0 else path.marks[mark, i]
         if value == 0.0 or path.pdf_cam[i] <= 0.0:
             continue
-        scale = value / (path.pdf_cam[i] * n)
+        scale = camera_estimate(value, path.pdf_cam[i], n)
         at = on_grid(path.lam_cam[i])
         x += scale * table_at(ks.wavelengths.xyz_weights, 0, at)
         y += scale * table_at(ks.wavelengths.xyz_weights, 1, at)
@@ -819,7 +825,7 @@ def _is_grey(ks, n, spec):
         first = attenuation(1.0, spec[m, SPEC_EXTINCTION, 0], spec[m, SPEC_EXCITATION, 0])
         for i in range(1, n):
             value = attenuation(1.0, spec[m, SPEC_EXTINCTION, i], spec[m, SPEC_EXCITATION, i])
-            if abs(value - first) > GREY_SPREAD * first:
+            if not attenuates_alike(value, first):
                 return False
     return True
 
@@ -839,17 +845,16 @@ def _faint_shadow_survives(ks, n, path, light, tracker, residual):
         least_depth = INF
         for i in range(n):
             least_depth = min(least_depth, _control_depth(ks, tracker, path.spec, i))
-        if least_depth > 0.0:
-            largest *= math.exp(-least_depth)
+        largest = shadow_bound(largest, least_depth)
     if largest >= SHADOW_ROULETTE_BELOW:
         return True
-    if _next(path.stream) < SHADOW_ROULETTE_STOP:
-        for i in range(n):
-            transmittance[i] = 0.0
-        return False
+    u = _next(path.stream)
+    going_on = False
     for i in range(n):
-        transmittance[i] /= 1.0 - SHADOW_ROULETTE_STOP
-    return True
+        transmittance[i] = shadow_roulette(transmittance[i], u)
+        if transmittance[i] > 0.0:
+            going_on = True
+    return going_on
 
 
 @jit(inline="always")
@@ -873,40 +878,26 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
     for m in range(ks.media.density_scale.shape[0]):
         state_f[m, CONTROL] = 0.0  # no control: plain ratio tracking
         state_f[m, DEPTH] = 0.0
-    t = 0.0
+    t, t_end, rate = 0.0, STALE, 0.0
     while True:
-        t_end, sigma_bar, control_rate = _tracker_segment(ks, tracker, residual)
-        if t_end == INF:
+        t, t_end, rate = _tentative_collision(ks, path.stream, tracker, t, t_end, rate, residual, residual)
+        if t == INF:
             break
-        rate = sigma_bar - control_rate
-        while True:
-            t_next = t_end
-            if rate > 0.0:
-                t_next = min(t + free_path(_next(path.stream), rate), t_end)
-            if residual:
-                _integrate_controls(ks, tracker, t_next - t)
-            t = t_next
-            if t == t_end:
-                break
-            px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+        px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+        for m in range(ks.media.density_scale.shape[0]):
+            state_f[m, EXCESS] = density(ks, m, px, py, pz) * ks.media.density_scale[m] - state_f[m, CONTROL]
+        for i in range(n):
+            excess = 0.0
             for m in range(ks.media.density_scale.shape[0]):
-                state_f[m, EXCESS] = density(ks, m, px, py, pz) * ks.media.density_scale[m] - state_f[m, CONTROL]
-            for i in range(n):
-                excess = 0.0
-                for m in range(ks.media.density_scale.shape[0]):
-                    excess += attenuation(state_f[m, EXCESS], path.spec[m, SPEC_EXTINCTION, i],
-                                          path.spec[m, SPEC_EXCITATION, i])
-                ratio = null_fraction(rate, excess, 0.0)
-                transmittance[i] *= ratio
-                if not residual:
-                    survival[i] *= ratio
-            if not _faint_shadow_survives(ks, n, path, light, tracker, residual):
-                return
-        _tracker_advance(ks, tracker, t_end)
+                excess += attenuation(state_f[m, EXCESS], path.spec[m, SPEC_EXTINCTION, i],
+                                      path.spec[m, SPEC_EXCITATION, i])
+            transmittance[i], survival[i] = ratio_tracked(transmittance[i], survival[i], rate, excess, residual)
+        if not _faint_shadow_survives(ks, n, path, light, tracker, residual):
+            return
     if residual:
         for i in range(n):
-            survival[i] = math.exp(-_control_depth(ks, tracker, path.spec, i))
-            transmittance[i] *= survival[i]
+            transmittance[i], survival[i] = residual_tracked(transmittance[i],
+                                                             _control_depth(ks, tracker, path.spec, i))
 
 
 @jit(inline="always")
@@ -939,15 +930,13 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, on_surface, grey, n, path
     _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, delta or grey, n, path, light, tracker)
     light_pdf = ks.lights.pmf[chosen] * direction_pdf
     for i in range(n):
-        light.r_l[i] = path.r_u[i] * light_pdf
-        light.r_u[i] = 0.0 if delta else path.r_u[i] * light.phase[i] * light.survival[i]
-    for i in range(n):
-        light.r_l[i] += light.r_u[i]
+        light.r_l[i] = light_sample_ratio(path.r_u[i], light_pdf, light.phase[i], light.survival[i], delta)
     mean_r = _mean(light.r_l, n)
     if mean_r > 0.0:
         for i in range(n):
             value = light.phase[i] * hit.reflectance[i] if on_surface else light.phase[i]
-            path.radiance[i] += path.beta[i] * value * light.transmittance[i] * light.radiance[i] / mean_r
+            path.radiance[i] += next_event_contribution(path.beta[i], value, light.transmittance[i],
+                                                        light.radiance[i], mean_r)
 
 
 @jit(inline="always")
@@ -966,7 +955,7 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
             source += path.beta[i] * vertex.medium_fl[m, i]
         if source <= 0.0:
             continue
-        weight = source / (sigma_bar * mean_r_u)
+        weight = collision_estimate(source, sigma_bar, mean_r_u)
         u = _next(path.stream)
         for k in range(RESERVOIRS):
             guided = weight if k == 0 else weight * (front_guide(tau) if k == 1 else back_guide(tau))
@@ -1001,10 +990,10 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, 
         for m in range(ks.media.density_scale.shape[0]):
             tracker.state_f[m, DEPTH] = 0.0
     fl.tau[0] = 0.0
-    t = 0.0
+    t, t_end, sigma_bar = 0.0, STALE, 0.0
     t_light, seen = _next_area_light(ks, ox, oy, oz, dx, dy, dz, 0.0, -1, t_max)
     while True:
-        t, sigma_bar = _tentative_collision(ks, path.stream, tracker, t, controls)
+        t, t_end, sigma_bar = _tentative_collision(ks, path.stream, tracker, t, t_end, sigma_bar, controls, False)
         while t > t_light:
             _area_light_seen(ks, seen, ox, oy, oz, dx, dy, dz, t_light, scattered, n, path, light)
             t_light, seen = _next_area_light(ks, ox, oy, oz, dx, dy, dz, t_light, seen, t_max)
@@ -1015,28 +1004,24 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, 
         mean_r_u = _mean(r_u, n)
         for i in range(n):
             if vertex.emission[i] > 0.0:
-                path.radiance[i] += beta[i] * vertex.emission[i] / (sigma_bar * mean_r_u)
+                path.radiance[i] += collision_estimate(beta[i] * vertex.emission[i], sigma_bar, mean_r_u)
         _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, vertex, fl)
         choice = _next(path.stream) * sigma_bar
         if choice < sigma_a[0] + sigma_s[0]:
             # A real collision scatters, weighted by the albedo: absorption lowers the throughput
             # instead of ending the path (Russian roulette ends faint paths).
-            probability0 = (sigma_a[0] + sigma_s[0]) / sigma_bar
+            probability0 = real_probability(sigma_a[0], sigma_s[0], sigma_bar)
             alive = False
             for i in range(n):
-                beta[i] *= sigma_s[i] / sigma_bar / probability0
-                r_u[i] *= (sigma_a[i] + sigma_s[i]) / sigma_bar / probability0
+                beta[i], r_u[i] = real_collision(beta[i], r_u[i], sigma_a[i], sigma_s[i], sigma_bar, probability0)
                 if beta[i] > 0.0:
                     alive = True
             return (EVENT_SCATTER if alive else EVENT_ABSORB), qx, qy, qz, sigma_bar
         probability0 = null_fraction(sigma_bar, sigma_a[0], sigma_s[0])
         alive = False
         for i in range(n):
-            ratio = null_fraction(sigma_bar, sigma_a[i], sigma_s[i])
-            beta[i] *= ratio / probability0
-            r_u[i] *= ratio / probability0
-            if not controls:
-                r_l[i] /= probability0
+            beta[i], r_u[i], r_l[i] = null_collision(beta[i], r_u[i], r_l[i], sigma_a[i], sigma_s[i], sigma_bar,
+                                                     probability0, controls)
             if beta[i] > 0.0:
                 alive = True
         if not alive:
@@ -1107,9 +1092,7 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
     if pdf0 <= 0.0:
         return 0.0, 0.0, 0.0
     for i in range(n):
-        path.r_l[i] = path.r_u[i] / pdf0
-        path.beta[i] *= phase_values[i] / pdf0
-        path.r_u[i] *= phase_values[i] / pdf0
+        path.beta[i], path.r_u[i], path.r_l[i] = phase_sampled(path.beta[i], path.r_u[i], phase_values[i], pdf0)
     return normalize(nx, ny, nz)
 
 
@@ -1122,9 +1105,9 @@ def _survives_roulette(ks, depth, n, path):
     largest = 0.0
     for i in range(n):
         largest = max(largest, path.beta[i] / mean_r)
-    if largest >= 1.0:
+    survive = roulette_survival(largest)
+    if survive >= 1.0:
         return True
-    survive = max(largest, 0.05)
     if _next(path.stream) >= survive:
         return False
     for i in range(n):
@@ -1168,7 +1151,7 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, ver
         if event == EVENT_ABSORB:
             return
         if event == EVENT_ESCAPE:
-            survival = math.exp(-_control_depth(ks, tracker, path.spec, 0)) if controls else 1.0
+            survival = controls_transmittance(_control_depth(ks, tracker, path.spec, 0)) if controls else 1.0
             if triangle < 0:
                 if marking and not scattered:
                     path.first[0] = BACKGROUND

@@ -47,7 +47,7 @@ KERNEL_SOURCES = ("kernels/numba_backend.py", "kernels/rng.py", "kernels/layout.
                   "kernels/geometry.py", "kernels/lookups.py", "kernels/dda.py", "kernels/media.py",
                   "kernels/light_sampling.py", "kernels/envmap.py", "phase.py", "binned.py", "planck.py", "shared_math.py",
                   "wavelengths.py", "kernels/surfaces.py", "constants.py", "kernels/transparency.py",
-                  "kernels/light_split.py", "kernels/first_hit.py", "kernels/spectrum_bins.py")
+                  "kernels/light_split.py", "kernels/first_hit.py", "kernels/spectrum_bins.py", "kernels/estimator.py")
 PREBUILT = TRACER / "kernels" / "prebuilt"  # the portable kernel the extension's zip ships (none in a checkout)
 NO_PREBUILT_VARIABLE = "SPECTRAL_VOLUME_NO_PREBUILT"  # set (to anything) to never load it
 PORTABLE_CPU = {"cpu": "generic", "cpu_features": ""}  # what Numba compiles for under NUMBA_CPU_NAME=generic

@@ -5,9 +5,10 @@ second engine that validates the Numba kernel. Paths are not traced one at a tim
 (in chunks of at most `CHUNK_PATHS`) are arrays of path states (`_Batch`, one row per path) that step
 together and are compacted as they end. One `_bounce` takes every live path through free flight, escape,
 the scattering or fluorescent vertex, next-event estimation, phase sampling and Russian roulette. The
-physics at each point is the arithmetic the Numba kernel compiles (look-ups, coefficients, phase functions,
-lights, free paths: docs/algorithm.md), called here on arrays of paths; this module holds
-the wavefront's loops and state, and the estimator's arithmetic on them (as the Numba kernel holds its own).
+physics at each point and the estimator's per-wavelength updates are the arithmetic the Numba kernel compiles
+(look-ups, coefficients, phase functions, lights, free paths; `estimator`: weights, MIS ratios, contributions,
+roulettes: docs/algorithm.md), called here on arrays of paths; this module holds the wavefront's loops, masks and
+state, and one tracking loop, `_track`, for free flights and shadow rays (as the Numba kernel has one).
 
 Surfaces: every ray is tested against every triangle (`_closest_hits`, brute force over chunks of triangles,
 the independent check of the Numba kernel's hierarchy); a path's free flight ends at the nearest one, where it
@@ -37,9 +38,13 @@ from ..planck import planck_radiance
 from . import media
 from .fluorescent_reservoir import RESERVOIRS, back_guide, chosen_reservoir, front_guide, mixture_weight
 from .dda import axis_entry, axis_span
+from .estimator import (
+    attenuates_alike, camera_estimate, collision_estimate, companion_uniform, controls_transmittance,
+    hit_light_contribution, hit_light_ratio, lambert_sampled, light_sample_ratio, next_event_contribution,
+    null_collision, phase_sampled, ratio_tracked, real_collision, real_probability, residual_tracked,
+    roulette_survival, shadow_bound, shadow_roulette)
 from .geometry import camera_depths, camera_ray, normalize, transform_point, transform_vector
-from .layout import (
-    GREY_SPREAD, LIGHT_AREA, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP, SURFACE_OFFSET)
+from .layout import LIGHT_AREA, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SURFACE_OFFSET
 from .light_sampling import (
     area_direction_pdf, area_light_hit, area_radiance, choose_light, incident_radiance, infinite_pdf,
     infinite_radiance, is_delta, sample_light)
@@ -359,9 +364,10 @@ def _area_lights_seen(ks, paths, rows, lights, distance, radiance):
         cos_light = -(paths.d[seen] @ ks.lights.dir[light])
         light_pdf = (ks.lights.pmf[light] * area_direction_pdf(ks, light, *_columns(paths.o[seen]), distance[mine],
                                                                cos_light))[:, None]
-        r_u, scattered = paths.r_u[seen], paths.scattered[seen]
-        mean_r = np.where(scattered, _mean(r_u + paths.r_l[seen] * light_pdf), _mean(r_u))[:, None]
-        radiance[paths.id[seen]] += np.where(mean_r > 0.0, paths.beta[seen] * emitted / mean_r, 0.0)
+        scattered = paths.scattered[seen, None]
+        mean_r = _mean(hit_light_ratio(paths.r_u[seen], paths.r_l[seen], 1.0, light_pdf, scattered))[:, None]
+        radiance[paths.id[seen]] += np.where(mean_r > 0.0, hit_light_contribution(paths.beta[seen], emitted, 1.0,
+                                                                                  scattered, mean_r), 0.0)
 
 
 # ----------------------------------------------------------------------------- surfaces
@@ -428,11 +434,10 @@ def _surface_emission(ks, paths, triangle, distance, survival, radiance):
     cos_light = np.abs(np.sum(normal * paths.d, axis=1))
     light_pdf = (ks.lights.pmf[light] * emitter_pdf(ks.surfaces.area[ks.surfaces.surface[triangle]], distance[rows],
                                                     cos_light))[:, None]
-    survival = survival[rows]
-    mean_r = np.where(paths.scattered, _mean(paths.r_u * survival[:, None] + paths.r_l * light_pdf),
-                      _mean(paths.r_u))[:, None]
-    weight = np.where(paths.scattered, survival, 1.0)[:, None]
-    radiance[paths.id] += np.where(mean_r > 0.0, paths.beta * emitted * weight / mean_r, 0.0)
+    survival, scattered = survival[rows, None], paths.scattered[:, None]
+    mean_r = _mean(hit_light_ratio(paths.r_u, paths.r_l, survival, light_pdf, scattered))[:, None]
+    radiance[paths.id] += np.where(mean_r > 0.0, hit_light_contribution(paths.beta, emitted, survival, scattered,
+                                                                        mean_r), 0.0)
 
 
 def _arrive_at_surfaces(ks, paths, triangle, distance):
@@ -471,9 +476,7 @@ def _camera_paths(ks, px, py, pixel_keys, samples):
     u = _draw(paths)
     lam_cam, pdf_cam = np.empty((count, n)), np.empty((count, n))
     for i in range(n):
-        ui = u + i / n
-        ui -= np.floor(ui)
-        lam_cam[:, i] = sample_binned(ks.wavelengths.cdf, ui)
+        lam_cam[:, i] = sample_binned(ks.wavelengths.cdf, companion_uniform(u, i, n))
         pdf_cam[:, i] = pdf_binned(ks.wavelengths.pdf, lam_cam[:, i])
     paths.lams[:] = lam_cam
     paths.grey = _is_grey(ks, paths.lams)
@@ -499,7 +502,7 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
         offering = np.flatnonzero(source > 0.0)
         if not offering.size:
             continue
-        weight = source[offering] / (sigma_bar[offering] * mean_r_u[offering])
+        weight = collision_estimate(source[offering], sigma_bar[offering], mean_r_u[offering])
         if guides is None:
             guides = (None, front_guide(tau), back_guide(tau))
         u = _draw(paths, rows[offering])
@@ -551,20 +554,18 @@ def _free_flight(ks, paths, radiance, fl, t_max):
         beta, r_u, r_l = paths.beta[rows], paths.r_u[rows], paths.r_l[rows]
         bar = sigma_bar[:, None]
         mean_r_u = _mean(r_u)
-        radiance[paths.id[rows]] += np.where(c.emission > 0.0, beta * c.emission / (bar * mean_r_u[:, None]), 0.0)
+        radiance[paths.id[rows]] += np.where(c.emission > 0.0,
+                                             collision_estimate(beta * c.emission, bar, mean_r_u[:, None]), 0.0)
         _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl)
-        ratio = media.null_fraction(bar, c.sigma_a, c.sigma_s)
         choice = _draw(paths, rows) * sigma_bar
-        sigma_t = c.sigma_a + c.sigma_s
         # A real collision scatters, weighted by the albedo (as in the Numba kernel).
-        collided = choice < sigma_t[:, 0]
-        null = ~collided
-        p0 = np.where(collided, sigma_t[:, 0] / sigma_bar, ratio[:, 0])[:, None]
-        beta = np.where(collided[:, None], beta * (c.sigma_s / bar / p0), beta)
-        r_u = np.where(collided[:, None], r_u * (sigma_t / bar / p0), r_u)
-        beta = np.where(null[:, None], beta * (ratio / p0), beta)
-        r_u = np.where(null[:, None], r_u * (ratio / p0), r_u)
-        r_l = np.where(null[:, None] & ~controls[rows, None], r_l / p0, r_l)
+        collided = choice < c.sigma_a[:, 0] + c.sigma_s[:, 0]
+        p0 = np.where(collided, real_probability(c.sigma_a[:, 0], c.sigma_s[:, 0], sigma_bar),
+                      media.null_fraction(sigma_bar, c.sigma_a[:, 0], c.sigma_s[:, 0]))[:, None]
+        real = real_collision(beta, r_u, c.sigma_a, c.sigma_s, bar, p0)
+        null = null_collision(beta, r_u, r_l, c.sigma_a, c.sigma_s, bar, p0, controls[rows, None])
+        beta, r_u, r_l = (np.where(collided[:, None], real[0], null[0]), np.where(collided[:, None], real[1], null[1]),
+                          np.where(collided[:, None], r_l, null[2]))
         paths.beta[rows], paths.r_u[rows], paths.r_l[rows] = beta, r_u, r_l
         alive = np.any(beta > 0.0, axis=1)
         scattered = collided & alive
@@ -581,7 +582,7 @@ def _free_flight(ks, paths, radiance, fl, t_max):
     pass_lights(escaped, np.full(escaped.size, INF))
     escaped = np.flatnonzero(controls & (vertex.event == EVENT_ESCAPE))
     spectra = _attenuation_spectra(ks, paths.lams[escaped, :1])
-    vertex.survival[escaped] = np.exp(-_control_depth(depth[escaped], *spectra)[:, 0])
+    vertex.survival[escaped] = controls_transmittance(_control_depth(depth[escaped], *spectra)[:, 0])
     return vertex
 
 
@@ -589,16 +590,15 @@ def _escape(ks, paths, radiance, survival):
     """Radiance of the infinite lights seen by escaping paths: plain for camera rays, MIS-weighted
     against light sampling after a scattering vertex, with each path's `survival` along its ray
     (`_free_flight`)."""
-    plain_mean = _mean(paths.r_u)
     at = on_grid(paths.lams)
     directions = _columns(paths.d[:, :, None])
-    weight = np.where(paths.scattered, survival, 1.0)[:, None]
+    survival, scattered = survival[:, None], paths.scattered[:, None]
     for light in range(ks.lights.kind.shape[0]):
         light_radiance = infinite_radiance(ks, light, at, *directions)
         light_pdf = ks.lights.pmf[light] * infinite_pdf(ks, light, *directions)
-        mean_r = np.where(paths.scattered, _mean(paths.r_u * survival[:, None] + paths.r_l * light_pdf),
-                          plain_mean)[:, None]
-        radiance[paths.id] += np.where(mean_r > 0.0, paths.beta * light_radiance * weight / mean_r, 0.0)
+        mean_r = _mean(hit_light_ratio(paths.r_u, paths.r_l, survival, light_pdf, scattered))[:, None]
+        radiance[paths.id] += np.where(mean_r > 0.0, hit_light_contribution(paths.beta, light_radiance, survival,
+                                                                            scattered, mean_r), 0.0)
 
 
 def _holes(ks, paths, sky, surface, triangle):
@@ -651,7 +651,7 @@ def _is_grey(ks, lams):
         return np.zeros(lams.shape[0], dtype=bool)
     value = media.attenuation(1.0, *_attenuation_spectra(ks, lams))
     first = value[:, :, :1]
-    return np.all(np.abs(value - first) <= GREY_SPREAD * first, axis=(1, 2))
+    return np.all(attenuates_alike(value, first), axis=(1, 2))
 
 
 def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
@@ -677,13 +677,12 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
         largest = np.max(transmittance[rays], axis=1, initial=0.0)
         bounded = np.flatnonzero(residual[rays] & (largest >= SHADOW_ROULETTE_BELOW))
         least = np.min(control_depth(rays[bounded]), axis=1, initial=INF)
-        largest[bounded] = np.where(least > 0.0, largest[bounded] * np.exp(-least), largest[bounded])
+        largest[bounded] = shadow_bound(largest[bounded], least)
         faint = np.flatnonzero((largest > 0.0) & (largest < SHADOW_ROULETTE_BELOW))
-        lost = _draw(paths, rows[rays[faint]]) < SHADOW_ROULETTE_STOP
-        transmittance[rays[faint[lost]]] = 0.0
-        transmittance[rays[faint[~lost]]] /= 1.0 - SHADOW_ROULETTE_STOP
+        transmittance[rays[faint]] = shadow_roulette(transmittance[rays[faint]],
+                                                     _draw(paths, rows[rays[faint]])[:, None])
         stop = largest == 0.0
-        stop[faint[lost]] = True
+        stop[faint] = ~np.any(transmittance[rays[faint]] > 0.0, axis=1)
         return stop
 
     def travel(rays, dt, control):
@@ -695,14 +694,13 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
         for m in range(depth.shape[1]):
             rho = media.density(ks, m, *_columns(points)) * ks.media.density_scale[m] - control_now[rays, m]
             excess = excess + media.attenuation(rho[:, None], extinction[rays, m], excitation[rays, m])
-        ratio = media.null_fraction(rate[:, None], excess, 0.0)
-        transmittance[rays] *= ratio
-        survival[rays] *= np.where(residual[rays, None], 1.0, ratio)
+        transmittance[rays], survival[rays] = ratio_tracked(transmittance[rays], survival[rays], rate[:, None], excess,
+                                                            residual[rays, None])
         return faint_survives(rays)
 
     _track(ks, paths, rows, origins, directions, t_max, collide, controls=residual, travel=travel, residual=True)
-    survival[residual] = np.exp(-control_depth(np.flatnonzero(residual)))
-    transmittance[residual] *= survival[residual]
+    transmittance[residual], survival[residual] = residual_tracked(transmittance[residual],
+                                                                   control_depth(np.flatnonzero(residual)))
     return transmittance, survival
 
 
@@ -730,11 +728,11 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
                                              paths.lams[rows], sample.delta[rows] | paths.grey[rows])
     r_u, phase_values = paths.r_u[rows], phase_values[rows]
     light_pdf = (ks.lights.pmf[lights[rows]] * sample.pdf[rows])[:, None]
-    r_u_light = np.where(sample.delta[rows, None], 0.0, r_u * phase_values * survival)
-    mean_r = _mean(r_u * light_pdf + r_u_light)
+    mean_r = _mean(light_sample_ratio(r_u, light_pdf, phase_values, survival, sample.delta[rows, None]))
     counted = mean_r > 0.0
     values = np.where(paths.on_surface[rows, None], phase_values * paths.reflectance[rows], phase_values)
-    contribution = paths.beta[rows] * values * transmittance * sample.radiance[rows] / mean_r[:, None]
+    contribution = next_event_contribution(paths.beta[rows], values, transmittance, sample.radiance[rows],
+                                           mean_r[:, None])
     radiance[paths.id[rows[counted]]] += contribution[counted]
 
 
@@ -759,9 +757,9 @@ def _sample_phase(ks, paths, vertex, isotropic):
                             _mixture_phase(ks, vertex.medium_s, paths.lams, new_cos))
     phase_values = np.where(surface[:, None], lambert_pdf(new_cos)[:, None], phase_values)
     pdf0 = phase_values[:, :1]
-    paths.r_l = paths.r_u / pdf0
-    paths.beta = paths.beta * np.where(surface[:, None], paths.reflectance, phase_values / pdf0)
-    paths.r_u = np.where(surface[:, None], paths.r_u, paths.r_u * (phase_values / pdf0))
+    sampled = np.where(surface[None, :, None], lambert_sampled(paths.beta, paths.r_u, paths.reflectance, pdf0),
+                       phase_sampled(paths.beta, paths.r_u, phase_values, pdf0))
+    paths.beta, paths.r_u, paths.r_l = sampled
     paths.d = _rows(normalize(*_columns(direction)), len(paths))
     paths.scattered[:] = True
     return pdf0[:, 0] > 0.0
@@ -769,9 +767,9 @@ def _sample_phase(ks, paths, vertex, isotropic):
 
 def _roulette(ks, paths):
     """Russian roulette on the MIS-weighted throughput once paths reach `rr_depth`; returns survivors."""
-    largest = np.max(paths.beta / _mean(paths.r_u)[:, None], axis=1, initial=0.0)
-    playing = np.flatnonzero((paths.depth >= ks.termination.rr_depth) & (largest < 1.0))
-    survive = np.maximum(largest[playing], 0.05)
+    survival = roulette_survival(np.max(paths.beta / _mean(paths.r_u)[:, None], axis=1, initial=0.0))
+    playing = np.flatnonzero((paths.depth >= ks.termination.rr_depth) & (survival < 1.0))
+    survive = survival[playing]
     lost = _draw(paths, playing) >= survive
     paths.beta[playing] /= survive[:, None]
     keep = np.ones(len(paths), dtype=bool)
@@ -956,7 +954,7 @@ def _xyz(ks, lam_cam, pdf_cam, radiance):
     xyz = np.zeros((count, 3))
     for i in range(n):
         counted = (radiance[:, i] != 0.0) & (pdf_cam[:, i] > 0.0)
-        scale_i = radiance[:, i] / (pdf_cam[:, i] * n)
+        scale_i = camera_estimate(radiance[:, i], pdf_cam[:, i], n)
         at = on_grid(lam_cam[:, i])
         for c in range(3):
             xyz[:, c] += np.where(counted, scale_i * table_at(ks.wavelengths.xyz_weights, c, at), 0.0)
