@@ -246,7 +246,7 @@ def _textures(surfaces: tuple[Surface, ...]) -> dict:
     """The surfaces' textures for `KernelSurfaces`: every texel back to back (float32) with each surface's offset
     (-1: none), shape and modes, and the RGB lattice's spectra where any surface has a texture."""
     offset, shape, mode = np.full(len(surfaces), -1, np.int64), np.zeros((len(surfaces), 2), np.int64), \
-        np.zeros((len(surfaces), 2), np.int64)
+        np.zeros((len(surfaces), 3), np.int64)
     texels, total = [np.zeros((0, 3), np.float32)], 0
     for index, surface in enumerate(surfaces):
         texture = surface.texture
@@ -254,7 +254,8 @@ def _textures(surfaces: tuple[Surface, ...]) -> dict:
             continue
         image = np.asarray(texture.image, dtype=np.float32)
         offset[index], shape[index], total = total, image.shape[:2], total + image.shape[0] * image.shape[1]
-        mode[index] = TEXTURE_EXTENSIONS.index(texture.extension), TEXTURE_INTERPOLATIONS.index(texture.interpolation)
+        mode[index] = (TEXTURE_EXTENSIONS.index(texture.extension), TEXTURE_INTERPOLATIONS.index(texture.interpolation),
+                       int(texture.srgb))
         texels.append(image.reshape(-1, 3))
     spectra = texel_spectra.lattice_spectra() if total else np.zeros((0, GRID.size))
     return dict(texture_offset=offset, texture_shape=shape, texture_mode=mode,

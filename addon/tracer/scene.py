@@ -178,14 +178,16 @@ class Light:
 class Texture:
     """An image on a surface's triangles through UVs, as Blender's Image Texture node reads it: a texel's colour
     is the Lambertian albedo's colour (its spectrum: `texel_spectra`), replacing the surface's `reflectance`.
-    `image[row, column]` is linear Rec.709 in [0, 1] with row 0 at the top (v = 1) and column 0 at u = 0; `uv`
+    `image[row, column]` is a colour in [0, 1] (linear Rec.709, or sRGB-encoded: `srgb`) with row 0 at the top (v = 1) and column 0 at u = 0; `uv`
     holds each of the surface's triangles' corners' (u, v), in the order of `Surface.triangles`. `extension`
-    (Repeat, Extend, Clip: black outside) and `interpolation` (Linear, Closest) have Blender's meanings."""
+    (Repeat, Extend, Clip: black outside) and `interpolation` (Linear, Closest) have Blender's meanings. With `srgb`
+    the texels are sRGB-encoded (an 8-bit sRGB image's) and decoded after interpolation, as Cycles reads them."""
 
     image: np.ndarray  # (H, W, 3) float32
     uv: np.ndarray  # (T, 3, 2) float64
     extension: str = "REPEAT"  # one of kernels.layout.TEXTURE_EXTENSIONS
     interpolation: str = "Linear"  # one of kernels.layout.TEXTURE_INTERPOLATIONS
+    srgb: bool = False  # texels sRGB-encoded, decoded after interpolation
 
 
 @dataclass(frozen=True, eq=False)

@@ -57,7 +57,7 @@ _LIGHT_FIELDS = {
 _ENVMAP_UNIT = "radiant"  # an envmap's only unit (its strength multiplies its map), so the file may omit it
 _SURFACE = {"required": ("reflectance",), "optional": ("name", "object", "material", "vertices", "triangles", "mesh",
                                                   "emission", "holdout", "camera", "texture")}
-_TEXTURE = {"required": ("image", "uv"), "optional": ("extension", "interpolation")}
+_TEXTURE = {"required": ("image", "uv"), "optional": ("extension", "interpolation", "srgb")}
 _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettings))}
 
 
@@ -307,7 +307,8 @@ def _texture(value, where: str, folder: Path) -> Texture:
     data = _fields(value, where, _TEXTURE)
     return Texture(image=_image(data["image"], f"{where}.image", folder), uv=_image(data["uv"], f"{where}.uv", folder),
                    extension=data.get("extension", Texture.extension),
-                   interpolation=data.get("interpolation", Texture.interpolation))
+                   interpolation=data.get("interpolation", Texture.interpolation),
+                   srgb=data.get("srgb", Texture.srgb))
 
 
 def _mesh_array(value, where: str, folder: Path) -> np.ndarray:
@@ -562,6 +563,8 @@ def _surface_json(surface: Surface, index: int, folder: Path) -> dict:
         texture = surface.texture
         data["texture"] = {"image": f"surfaces{index}_texture.npy", "uv": f"surfaces{index}_uv.npy",
                            "extension": texture.extension, "interpolation": texture.interpolation}
+        if texture.srgb:
+            data["texture"]["srgb"] = True
         np.save(folder / data["texture"]["image"], np.asarray(texture.image, dtype=np.float32), allow_pickle=False)
         np.save(folder / data["texture"]["uv"], np.asarray(texture.uv, dtype=np.float64), allow_pickle=False)
     data.update({key: getattr(surface, key) for key in ("object", "material") if getattr(surface, key)})

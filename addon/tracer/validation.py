@@ -156,6 +156,7 @@ def _check_texture(texture: Texture, triangles: int, where: str) -> None:
         raise SpectralError(f"{where}.uv: must be finite, found {uv[at]:g} at [triangle, corner, u/v] {list(at)}")
     checks.one_of(texture.extension, f"{where}.extension", TEXTURE_EXTENSIONS)
     checks.one_of(texture.interpolation, f"{where}.interpolation", TEXTURE_INTERPOLATIONS)
+    _check_boolean(texture.srgb, f"{where}.srgb")
 
 
 def optical_depth(medium: Medium) -> float:

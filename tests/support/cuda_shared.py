@@ -103,6 +103,7 @@ def signatures(types=None, typeof=None):
         surfaces._texel_index: (I, I, I),
         surfaces.texel_colour: (KS, I, I, F, F, F),
         surfaces._lattice: (F,),
+        surfaces._srgb_decoded: (F, types.boolean),
         surfaces.rgb_reflectance: (A2, F, F, F, AT),
         surfaces.offset_point: (F, F, F, F, F, F),
         surfaces.lambert_pdf: (F,),

@@ -188,8 +188,10 @@ class KernelSurfaces(NamedTuple):
     uv: np.ndarray  # (T, 6) each triangle's corners' u, v (zeros on a surface without a texture)
     texture_offset: np.ndarray  # (S,) a textured surface's first texel in `texels`, -1 for a surface without one
     texture_shape: np.ndarray  # (S, 2) its texture's rows and columns
-    texture_mode: np.ndarray  # (S, 2) its extension (TEXTURE_EXTENSIONS) and interpolation (TEXTURE_INTERPOLATIONS)
-    texels: np.ndarray  # (texels, 3) float32 linear Rec.709 in [0, 1], each texture's rows back to back, top row first
+    # (S, 3) its extension (TEXTURE_EXTENSIONS), interpolation (TEXTURE_INTERPOLATIONS), and 1 where its texels are
+    # sRGB-encoded (decoded after interpolation, as Cycles decodes 8-bit sRGB images), else 0
+    texture_mode: np.ndarray
+    texels: np.ndarray  # (texels, 3) float32 in [0, 1], each texture's rows back to back, top row first
     rgb_spectra: np.ndarray  # (RGB_LATTICE³ or 0, GRID) the reflectance of each RGB lattice node (`texel_spectra`)
     of_light: np.ndarray  # (NL,) the surface of each kernel light, -1 for lights that are not surfaces
     area: np.ndarray  # (S,) total area

@@ -16,7 +16,7 @@ so a sampled direction's throughput is ρ, the same pdf at every wavelength.
 
 import numpy as np
 
-from ..shared_math import absolute, floor, select, shared, shared_inline, sqrt
+from ..shared_math import absolute, exp, floor, select, shared, shared_inline, sqrt
 from .layout import RGB_LATTICE, SURFACE_OFFSET, TEXTURE_CLIP, TEXTURE_LINEAR, TEXTURE_REPEAT
 from .lookups import cdf_bin, table_at
 
@@ -60,7 +60,8 @@ def barycentrics(ks, k, px, py, pz):
     e1x, e1y, e1z = edge1[k, 0], edge1[k, 1], edge1[k, 2]
     e2x, e2y, e2z = edge2[k, 0], edge2[k, 1], edge2[k, 2]
     vx, vy, vz = px - corner[k, 0], py - corner[k, 1], pz - corner[k, 2]
-    d11, d12, d22 = e1x * e1x + e1y * e1y + e1z * e1z, e1x * e2x + e1y * e2y + e1z * e2z, e2x * e2x + e2y * e2y + e2z * e2z
+    d11, d22 = e1x * e1x + e1y * e1y + e1z * e1z, e2x * e2x + e2y * e2y + e2z * e2z
+    d12 = e1x * e2x + e1y * e2y + e1z * e2z
     v1, v2 = vx * e1x + vy * e1y + vz * e1z, vx * e2x + vy * e2y + vz * e2z
     inverse = 1.0 / (d11 * d22 - d12 * d12)
     return (d22 * v1 - d12 * v2) * inverse, (d11 * v2 - d12 * v1) * inverse
@@ -80,7 +81,8 @@ def _texel_index(i, count, extension):
 def texel_colour(ks, s, k, px, py, pz):
     """The linear Rec.709 colour of textured surface(s) s at point(s) p of their triangle(s) k: the UV of p
     between the triangle's corners, read as Blender reads an image (Linear: the 4 texels around it weighted
-    bilinearly, texel centres at (i + ½) / W; Closest: the texel it falls in), with the texture's extension."""
+    bilinearly, texel centres at (i + ½) / W; Closest: the texel it falls in), with the texture's extension, and
+    decoded from sRGB after interpolation where its texels are encoded so (as Cycles reads 8-bit sRGB images)."""
     b1, b2 = barycentrics(ks, k, px, py, pz)
     uv = ks.surfaces.uv
     u = uv[k, 0] + b1 * (uv[k, 2] - uv[k, 0]) + b2 * (uv[k, 4] - uv[k, 0])
@@ -103,7 +105,15 @@ def texel_colour(ks, s, k, px, py, pz):
         r = r + weight * ks.surfaces.texels[texel, 0]
         g = g + weight * ks.surfaces.texels[texel, 1]
         b = b + weight * ks.surfaces.texels[texel, 2]
-    return r, g, b
+    srgb = ks.surfaces.texture_mode[s, 2] == 1
+    return _srgb_decoded(r, srgb), _srgb_decoded(g, srgb), _srgb_decoded(b, srgb)
+
+
+@shared
+def _srgb_decoded(value, srgb):
+    """A colour component in [0, 1] decoded from the sRGB transfer function where `srgb`, else as it is."""
+    curve = exp(2.4 * np.log(np.maximum((value + 0.055) / 1.055, 1e-300)))
+    return select(srgb, select(value <= 0.04045, value / 12.92, curve), value)
 
 
 @shared
