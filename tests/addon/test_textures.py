@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 
+from addon.cycles_emulation.job import EmulationJob
+from addon.cycles_emulation.surfaces import TEXTURED_WARNING
 from tests.addon.test_blender_scene import factory_scene
 from tests.addon.test_surfaces import COLOURED_DELTA_E, _export, _plane, _surface_shader
 from tests.support.cycles import NOISE_BOUND, compare
@@ -130,11 +132,9 @@ def test_what_is_not_rendered_is_named(factory, tmp_path):
     assert "material 'Mixed' ▸ Image Texture: an Image Texture mixed with other shaders' colours" in warning
 
 
-@pytest.mark.slow
-def test_a_textured_plane_under_a_sun_matches_cycles(factory, tmp_path):
+def _textured_ground_under_a_sun(factory):
     """The 8 × 4 image repeated twice across a 4 × 4 plane (the Texture Coordinate node's UV through a Mapping node's
-    scale 2, Repeat, Linear) on a Diffuse BSDF's Color, under a sun at 50°, seen from above: block means agree with
-    Cycles within noise and the colour within the coloured bound."""
+    scale 2, Repeat, Linear) on a Diffuse BSDF's Color, under a sun at 50°, no World, seen from above."""
     bpy.data.objects.remove(bpy.data.objects["Light"])
     bpy.data.objects.remove(bpy.data.objects["Cube"])
     factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
@@ -151,10 +151,29 @@ def test_a_textured_plane_under_a_sun_matches_cycles(factory, tmp_path):
     _plane("Ground", size=4.0, material=material)
     camera = factory.camera
     camera.location, camera.rotation_euler = (0.0, 0.0, 5.0), (0.0, 0.0, 0.0)
+
+
+@pytest.mark.slow
+def test_a_textured_plane_under_a_sun_matches_cycles(factory, tmp_path):
+    """`_textured_ground_under_a_sun` (8-bit sRGB texels, interpolated before they are decoded, as Cycles does): block
+    means agree with Cycles within noise and the colour within the coloured bound."""
+    _textured_ground_under_a_sun(factory)
     result = compare(factory, tmp_path, tracer_spp=16, cycles_spp=16)
     print(result)
     assert result.warnings == []
     assert result.delta_e < COLOURED_DELTA_E and result.z < NOISE_BOUND
+
+
+@pytest.mark.slow
+def test_the_cycles_emulation_renders_a_textured_plane_and_says_it_is_grey(factory):
+    """The Cycles emulation cannot make texels spectral: it renders the textured plane with the texture's luminance
+    and names it."""
+    _textured_ground_under_a_sun(factory)
+    export = _export()
+    job = EmulationJob(factory, export.scene, export.warnings, band_count=3, spp=16)
+    job.run()
+    assert job.succeeded, job.error
+    assert any(TEXTURED_WARNING.format(name="Textured") in warning for warning in job.warnings)
 
 
 @pytest.mark.slow
