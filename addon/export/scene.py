@@ -46,7 +46,7 @@ from .passes import pass_settings, spectrum_settings, unmade_warning
 from ..nodes.notes import Notes
 from .volume_fields import VolumeFields
 from .volumes import volume_grids
-from .surfaces import export_surfaces, held_out
+from .surfaces import export_surfaces, held_out, seen_by_camera
 from .world import export_world
 from ..tracer.validation import validate
 
@@ -84,17 +84,20 @@ def _object_parts(instance, depsgraph, volume_owners, originals: bool, notes: No
     obj, matrix = instance.object, instance.matrix_world
     is_volume = obj.type == "VOLUME" or (obj.type == "MESH" and fluid_domain(obj) is not None)
     material = volume_material(obj, depsgraph) if is_volume or obj.type == "MESH" else None
-    holdout = held_out(instance, depsgraph.view_layer, notes)
+    holdout, camera = held_out(instance, depsgraph.view_layer), seen_by_camera(instance, depsgraph.view_layer)
     if holdout and material is not None:
         notes.add(f"object {obj.name!r}: Holdout has no effect on a volume, in Cycles as here: the volume renders as "
                   "it is")
+    if not camera and material is not None:
+        notes.add(f"object {obj.name!r}: a volume hidden from the camera (Indirect Only, Ray Visibility ▸ Camera) is "
+                  "rendered as seen by the camera too")
     if material is None:
         if is_volume:
             names = [material.name for material in materials(obj, depsgraph)]
             notes.leave_out("volume without a volume material", obj.name + (f" ({', '.join(names)})" if names else ""),
                             "volumes without a volume material")
             return [], []
-        return [], export_surfaces(obj, matrix, depsgraph, notes, holdout)
+        return [], export_surfaces(obj, matrix, depsgraph, notes, holdout, camera)
     if obj.type == "MESH" and not is_volume and obj.original in volume_owners and not obj.data.polygons:
         return [], []  # Geometry Nodes turned the mesh into a volume: only that volume renders
     material = material.original if originals else material

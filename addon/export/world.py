@@ -40,16 +40,22 @@ def _srgb_to_linear(values: np.ndarray) -> np.ndarray:
 MAX_MAP_WIDTH = 2048  # wider HDRIs are averaged down (by whole texel blocks) to at most this width
 
 
-def image_rgb(image) -> np.ndarray | None:
+def srgb_bytes(image) -> bool:
+    """Whether an image's pixels are 8-bit sRGB-encoded (what `image_rgb` linearises)."""
+    return not image.is_float and image.colorspace_settings.name == "sRGB"
+
+
+def image_rgb(image, decode: bool = True) -> np.ndarray | None:
     """An image's linear Rec.709 pixels (height, width, 3), top row first, at most MAX_MAP_WIDTH wide
-    (blocks of texels averaged); None when it has no pixels. 8-bit sRGB images are linearised."""
+    (blocks of texels averaged); None when it has no pixels. 8-bit sRGB images are linearised (`decode`), or,
+    without `decode`, left encoded."""
     width, height = image.size
     if width == 0 or height == 0:
         return None
     pixels = np.empty(width * height * image.channels, dtype=np.float32)
     image.pixels.foreach_get(pixels)
     rgb = pixels.reshape(height, width, image.channels)[::-1, :, :3]  # Blender stores the bottom row first
-    if not image.is_float and image.colorspace_settings.name == "sRGB":
+    if decode and srgb_bytes(image):
         rgb = _srgb_to_linear(rgb.astype(np.float64)).astype(np.float32)
     step = -(-width // MAX_MAP_WIDTH)
     if step > 1:

@@ -2,9 +2,10 @@
 
 The exporter converts the parts of a node tree that have a meaning without a renderer's shader VM: a
 socket's own value, a Value or RGB node, a Blackbody node of constant temperature, an Attribute node
-naming a grid. Anything else feeding an input (a texture, maths on coordinates) cannot be converted:
-the input is read at its default value and a `notes.Notes` entry names the data block, node and input, so
-the render report can say what was not rendered as set.
+naming a grid, and, for the surfaces' albedo, an Image Texture through UVs (`image_texture`, which the
+tracer renders as an image). Anything else feeding an input (another texture, maths on coordinates) cannot be
+converted: the input is read at its default value and a `notes.Notes` entry names the data block, node and
+input, so the render report can say what was not rendered as set.
 """
 
 from dataclasses import dataclass
@@ -128,3 +129,95 @@ def reflectance_spectrum(value) -> spectra.Spectrum:
     if isinstance(value, Blackbody):
         value = colorimetry.xyz_to_rgb(colorimetry.spectrum_to_xyz(emission_spectrum(value).values))
     return spectra.scaled_from_rgb(np.maximum(value, 0.0))
+
+
+@dataclass(frozen=True)
+class ImageTexture:
+    """A colour input read from an Image Texture node through UVs (`image_texture`): the node and its image, the UV
+    map ("": the mesh's active render map), the affine map (2, 3) of a Mapping node between them ((u', v') = A (u,
+    v, 1); identity without one), and the extension and interpolation the tracer reads it with."""
+
+    node: object
+    image: object
+    uv_map: str
+    uv_transform: np.ndarray
+    extension: str
+    interpolation: str
+
+
+def _uv_source(texture, owner: str, notes: Notes):
+    """(UV map name, affine map (2, 3)) feeding an Image Texture's Vector, or None (noted) where something else
+    feeds it: unlinked or a Texture Coordinate node's UV (the active render UV map, ""), a UV Map node, optionally
+    through a Mapping node of constant inputs (Point, Texture or Vector: affine in the UV, so the corners' UVs are
+    mapped as Cycles maps each point's)."""
+    vector = next(socket for socket in texture.inputs if socket.identifier == "Vector")
+    transform = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    found = source(vector)
+    if found is not None and found[0].bl_idname == "ShaderNodeMapping":
+        mapping = found[0]
+        driven = any(mapping.inputs[name].is_linked for name in ("Location", "Rotation", "Scale")
+                     if name in mapping.inputs)
+        if driven or mapping.vector_type == "NORMAL":
+            notes.add(f"{owner} ▸ {mapping.name}: a Mapping node of driven inputs or of type Normal cannot be "
+                      f"converted: {texture.name} rendered as its node's colour")
+            return None
+        transform = _mapping_matrix(mapping)
+        found = source(mapping.inputs["Vector"])
+    if found is None:
+        return "", transform
+    if found[0].bl_idname == "ShaderNodeUVMap" and not found[0].from_instancer:
+        return found[0].uv_map, transform
+    if found[0].bl_idname == "ShaderNodeTexCoord" and found[1].name == "UV" and not found[0].from_instancer:
+        return "", transform
+    notes.add(f"{owner} ▸ {texture.name} ▸ Vector is driven by {found[0].name!r}, which the tracer does not map "
+              "textures with (only UVs): the texture is not rendered")
+    return None
+
+
+def _mapping_matrix(mapping) -> np.ndarray:
+    """The affine map (2, 3) a Mapping node of constant inputs applies to a UV point (u, v, 0), as Cycles: Point
+    R (S v) + L, Texture S⁻¹ R⁻¹ (v − L), Vector R (S v) (R: the XYZ Euler rotation)."""
+    from mathutils import Euler  # Blender's own Euler convention
+
+    rotation = np.array(Euler(mapping.inputs["Rotation"].default_value).to_matrix(), dtype=np.float64)
+    location = np.array(mapping.inputs["Location"].default_value, dtype=np.float64)
+    scale = np.array(mapping.inputs["Scale"].default_value, dtype=np.float64)
+    if mapping.vector_type == "TEXTURE":
+        linear = np.diag(1.0 / np.where(scale != 0.0, scale, np.inf)) @ rotation.T
+        shift = -linear @ location
+    else:
+        linear, shift = rotation @ np.diag(scale), (location if mapping.vector_type == "POINT" else np.zeros(3))
+    return np.column_stack([linear[:2, :2], shift[:2]])
+
+
+def image_texture(node, name: str, owner: str, notes: Notes) -> ImageTexture | None:
+    """The Image Texture node feeding `node`'s colour input `name` through its Color output, where the tracer
+    renders it (a flat projection of a single image through UVs, `_uv_source`); None where none feeds it, or
+    (noted) where one does that the tracer cannot render: the caller then reads the input as `colour` does."""
+    found = source(node.inputs[name])
+    if found is None or found[0].bl_idname != "ShaderNodeTexImage":
+        return None
+    texture, output = found
+    where = f"{owner} ▸ {texture.name}"
+    problem = None
+    if output.name != "Color":
+        problem = f"its {output.name} output"
+    elif texture.image is None:
+        problem = "no image"
+    elif texture.image.source not in ("FILE", "GENERATED"):
+        problem = f"a {texture.image.source.lower()} image"
+    elif texture.projection != "FLAT":
+        problem = f"{texture.projection.title()} projection"
+    if problem is not None:
+        notes.add(f"{where}: {problem} is not a texture the tracer renders")
+        return None
+    uv = _uv_source(texture, owner, notes)
+    if uv is None:
+        return None
+    extension = texture.extension if texture.extension in ("REPEAT", "EXTEND", "CLIP") else "REPEAT"
+    if extension != texture.extension:
+        notes.add(f"{where}: extension {texture.extension.title()} rendered as Repeat")
+    interpolation = "Closest" if texture.interpolation == "Closest" else "Linear"
+    if interpolation != texture.interpolation:
+        notes.add(f"{where}: {texture.interpolation} interpolation rendered as Linear")
+    return ImageTexture(texture, texture.image, uv[0], uv[1], extension, interpolation)

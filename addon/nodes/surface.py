@@ -3,6 +3,8 @@
 The tracer's surfaces reflect diffusely and may emit (`tracer.scene.Surface`). From Cycles' closures:
 - Diffuse BSDF: its Color is the albedo (a Roughness above 0, Oren–Nayar in Cycles, renders as Lambert,
   noted);
+- either's albedo may be an Image Texture through UVs (`graph.image_texture`) where that closure is the material's
+  only albedo (`SurfaceLook.texture`; mixed with other albedos, the socket's value, noted);
 - Principled BSDF: its Base Color is the albedo, and Emission Color × Emission Strength its emission; its
   specular layer, and Metallic, Transmission, Coat, Sheen and Subsurface where their weights are above 0,
   are not rendered (noted, once per material);
@@ -22,7 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..tracer.wavelengths import GRID
-from .graph import colour, emission_spectrum, number, output_source, reflectance_spectrum, source
+from .graph import (ImageTexture, colour, emission_spectrum, finite, image_texture, number, output_source,
+                    reflectance_spectrum, source)
 from .notes import Notes
 
 DEFAULT_ALBEDO = 0.8  # Cycles' surface of an object without a material
@@ -53,6 +56,7 @@ class SurfaceLook:
     reflectance: np.ndarray
     emission: np.ndarray
     holdout: bool = False  # the material holds out (its Holdout closures' weight, above 0)
+    texture: ImageTexture | None = None  # the albedo's image (`reflectance` is then its socket's value)
 
     def emits(self) -> bool:
         return bool(np.any(self.emission > 0))
@@ -63,8 +67,22 @@ def default_look() -> SurfaceLook:
     return SurfaceLook(reflectance, np.zeros_like(reflectance))
 
 
+def _albedo(node, name, owner, notes, weight, look):
+    """Add the albedo of `node`'s colour input `name`: its colour, or for an Image Texture the tracer renders, the
+    socket's value, the texture being kept in `look` (`read_surface_shader` keeps it where it is the only albedo)."""
+    texture = image_texture(node, name, owner, notes)
+    if texture is None:
+        value = colour(node, name, owner, notes)
+    else:
+        value = finite(tuple(float(v) for v in node.inputs[name].default_value[:3]),
+                       f"{owner} ▸ {node.name} ▸ {name}")
+        look["textures"].append((texture, weight))
+    look["albedos"] += 1
+    look["reflectance"] += weight * reflectance_spectrum(value).values
+
+
 def _principled(node, owner, notes, weight, look):
-    look["reflectance"] += weight * reflectance_spectrum(colour(node, "Base Color", owner, notes)).values
+    _albedo(node, "Base Color", owner, notes, weight, look)
     strength = max(float(number(node, "Emission Strength", owner, notes)), 0.0)
     if strength > 0:
         look["emission"] += weight * strength * emission_spectrum(colour(node, "Emission Color", owner, notes)).values
@@ -80,7 +98,7 @@ def _closure(node, owner, notes, weight, look):
     if kind == "ShaderNodeBsdfPrincipled":
         _principled(node, owner, notes, weight, look)
     elif kind == "ShaderNodeBsdfDiffuse":
-        look["reflectance"] += weight * reflectance_spectrum(colour(node, "Color", owner, notes)).values
+        _albedo(node, "Color", owner, notes, weight, look)
         if float(number(node, "Roughness", owner, notes)) > 0:
             notes.add(f"{owner} ▸ {node.name}: Roughness rendered as 0 (Lambert)")
     elif kind == "ShaderNodeEmission":
@@ -98,6 +116,7 @@ def _closure(node, owner, notes, weight, look):
         _follow(node.inputs[2], owner, notes, weight * fac, look)
     elif kind in _COLOURED:
         look["reflectance"] += weight * reflectance_spectrum(colour(node, albedo_socket(node), owner, notes)).values
+        look["albedos"] += 1
         notes.add(f"{owner} ▸ {node.name}: {node.bl_label or kind} rendered as a diffuse surface of its colour")
     else:
         notes.add(f"{owner} ▸ {node.name}: {node.bl_label or kind} is not a surface shader the exporter converts: "
@@ -118,9 +137,15 @@ def read_surface_shader(material, notes: Notes) -> SurfaceLook | None:
     if found is None:
         return None
     zeros = np.zeros(GRID.size)
-    look = {"reflectance": zeros.copy(), "emission": zeros.copy(), "holdout": 0.0}
+    look = {"reflectance": zeros.copy(), "emission": zeros.copy(), "holdout": 0.0, "albedos": 0, "textures": []}
     owner = f"material {material.name!r}"
     _closure(found[0], owner, notes, 1.0, look)
     if 0.0 < look["holdout"] < 1.0:
         notes.add(f"{owner}: Holdout mixed in at weight {look['holdout']:.3g} rendered as a whole holdout")
-    return SurfaceLook(np.clip(look["reflectance"], 0.0, 1.0), look["emission"], look["holdout"] > 0.0)
+    texture = None
+    if look["textures"] and look["albedos"] == 1 and look["textures"][0][1] == 1.0:
+        texture = look["textures"][0][0]
+    for unused, _weight in look["textures"][1 if texture is not None else 0:]:
+        notes.add(f"{owner} ▸ {unused.node.name}: an Image Texture mixed with other shaders' colours is not "
+                  "rendered (its socket's value is)")
+    return SurfaceLook(np.clip(look["reflectance"], 0.0, 1.0), look["emission"], look["holdout"] > 0.0, texture)

@@ -10,7 +10,7 @@ World conventions are Blender's: z up, lengths in Blender units, cameras looking
 import numpy as np
 
 from . import spectra
-from .scene import Camera, Grid, Light, Medium, RenderSettings, Scene, Surface, look_at
+from .scene import Camera, Grid, Light, Medium, RenderSettings, Scene, Surface, Texture, look_at
 from .wavelengths import GRID
 
 
@@ -58,10 +58,12 @@ def medium(density: Grid, scale: float = 1.0, *, name: str = "medium", extinctio
 
 
 def parallelogram(corner, edge_u, edge_v, subdivisions: int = 1, *, reflectance=1.0, emission=None,
-                  name: str = "surface", holdout: bool = False) -> Surface:
+                  name: str = "surface", holdout: bool = False, camera: bool = True, image=None,
+                  extension: str = "REPEAT", interpolation: str = "Linear", srgb: bool = False) -> Surface:
     """A flat surface spanning corner + a·edge_u + b·edge_v for a, b in [0, 1], cut into `subdivisions`² cells
     of two triangles each; `reflectance` and `emission` (None: not a light) are numbers or spectra; `holdout`
-    as `Surface.holdout`."""
+    and `camera` as `Surface`'s; an `image` (H, W, 3) is its texture (`Texture`, with `extension`, `interpolation`
+    and `srgb`) at UV (a, b)."""
     n = int(subdivisions)
     a, b = np.meshgrid(np.linspace(0.0, 1.0, n + 1), np.linspace(0.0, 1.0, n + 1), indexing="ij")
     vertices = (np.asarray(corner, dtype=np.float64) + a.reshape(-1, 1) * np.asarray(edge_u, dtype=np.float64)
@@ -70,8 +72,12 @@ def parallelogram(corner, edge_u, edge_v, subdivisions: int = 1, *, reflectance=
     first = (i * (n + 1) + j).ravel()
     triangles = np.concatenate([np.stack([first, first + n + 1, first + n + 2], axis=1),
                                 np.stack([first, first + n + 2, first + 1], axis=1)])
+    texture = None if image is None else Texture(
+        image=np.asarray(image, dtype=np.float32), uv=np.stack([a.ravel(), b.ravel()], axis=1)[triangles],
+        extension=extension, interpolation=interpolation, srgb=srgb)
     return Surface(name=name, vertices=vertices, triangles=triangles, reflectance=as_spectrum(reflectance),
-                   emission=None if emission is None else as_spectrum(emission), holdout=holdout)
+                   emission=None if emission is None else as_spectrum(emission), holdout=holdout, camera=camera,
+                   texture=texture)
 
 
 def direction(elevation: float, azimuth: float = 0.0) -> np.ndarray:

@@ -8,7 +8,7 @@ the same `KernelScene`, so they cannot disagree about the scene.
 
 import numpy as np
 
-from . import bvh, colorimetry, envmaps, sampling
+from . import bvh, colorimetry, envmaps, sampling, texel_spectra
 from .checks import unit
 from .errors import SpectralError
 from .glow import normalisation_table
@@ -18,6 +18,8 @@ from .kernels.layout import (
     LIGHT_KINDS,
     LIGHT_MESH,
     PHASES,
+    TEXTURE_EXTENSIONS,
+    TEXTURE_INTERPOLATIONS,
     KernelCamera,
     KernelDensity,
     KernelEnvmaps,
@@ -219,8 +221,9 @@ def _selection_pmf(power: np.ndarray) -> np.ndarray:
 
 
 def _triangles(surfaces: tuple[Surface, ...]):
-    """Every surface's triangles of non-zero area, back to back: (corner, edge1, edge2, cross, owner), cross
-    being edge1 × edge2 (twice the area along the normal) and owner each triangle's surface."""
+    """Every surface's triangles of non-zero area, back to back: (corner, edge1, edge2, cross, owner, uv), cross
+    being edge1 × edge2 (twice the area along the normal), owner each triangle's surface and uv its corners' (u, v)
+    (T, 6) (zeros without a texture)."""
     parts = []
     for index, surface in enumerate(surfaces):
         vertices = np.asarray(surface.vertices, dtype=np.float64)
@@ -229,23 +232,48 @@ def _triangles(surfaces: tuple[Surface, ...]):
         edge1, edge2 = vertices[triangles[:, 1]] - corner, vertices[triangles[:, 2]] - corner
         cross = np.cross(edge1, edge2)
         keep = np.linalg.norm(cross, axis=1) > 0.0
-        parts.append((corner[keep], edge1[keep], edge2[keep], cross[keep], np.full(keep.sum(), index, np.int64)))
+        uv = (np.zeros((len(triangles), 6)) if surface.texture is None
+              else np.asarray(surface.texture.uv, dtype=np.float64).reshape(-1, 6))
+        parts.append((corner[keep], edge1[keep], edge2[keep], cross[keep], np.full(keep.sum(), index, np.int64),
+                      uv[keep]))
     if not parts:
-        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int64)
+        return (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int64),
+                np.zeros((0, 6)))
     return tuple(np.concatenate(columns) for columns in zip(*parts))
+
+
+def _textures(surfaces: tuple[Surface, ...]) -> dict:
+    """The surfaces' textures for `KernelSurfaces`: every texel back to back (float32) with each surface's offset
+    (-1: none), shape and modes, and the RGB lattice's spectra where any surface has a texture."""
+    offset, shape, mode = np.full(len(surfaces), -1, np.int64), np.zeros((len(surfaces), 2), np.int64), \
+        np.zeros((len(surfaces), 3), np.int64)
+    texels, total = [np.zeros((0, 3), np.float32)], 0
+    for index, surface in enumerate(surfaces):
+        texture = surface.texture
+        if texture is None:
+            continue
+        image = np.asarray(texture.image, dtype=np.float32)
+        offset[index], shape[index], total = total, image.shape[:2], total + image.shape[0] * image.shape[1]
+        mode[index] = (TEXTURE_EXTENSIONS.index(texture.extension), TEXTURE_INTERPOLATIONS.index(texture.interpolation),
+                       int(texture.srgb))
+        texels.append(image.reshape(-1, 3))
+    spectra = texel_spectra.lattice_spectra() if total else np.zeros((0, GRID.size))
+    return dict(texture_offset=offset, texture_shape=shape, texture_mode=mode,
+                texels=np.ascontiguousarray(np.concatenate(texels)), rgb_spectra=spectra)
 
 
 def _surface_arrays(surfaces: tuple[Surface, ...], first_light: int) -> tuple[KernelSurfaces, list[int]]:
     """The surfaces' triangles in the order of their hierarchy (`bvh.build`) with its nodes, their spectra,
     and the emissive surfaces' triangle distributions, each emissive surface (of some area and emission)
     being kernel light `first_light`, `first_light` + 1, ... in turn; and the list of those surfaces."""
-    corner, edge1, edge2, cross, owner = _triangles(surfaces)
+    corner, edge1, edge2, cross, owner, uv = _triangles(surfaces)
     count = len(surfaces)
     bounds, first, node_count = np.zeros((0, 6)), np.zeros(0, np.int64), np.zeros(0, np.int64)
     if owner.size:
         points = np.stack([corner, corner + edge1, corner + edge2])
         order, bounds, first, node_count = bvh.build(points.min(axis=0), points.max(axis=0))
-        corner, edge1, edge2, cross, owner = corner[order], edge1[order], edge2[order], cross[order], owner[order]
+        corner, edge1, edge2, cross, owner, uv = (corner[order], edge1[order], edge2[order], cross[order],
+                                                  owner[order], uv[order])
     double_area = np.linalg.norm(cross, axis=1)
     area = 0.5 * np.bincount(owner, weights=double_area, minlength=count)
     light = np.full(count, -1, dtype=np.int64)
@@ -271,6 +299,7 @@ def _surface_arrays(surfaces: tuple[Surface, ...], first_light: int) -> tuple[Ke
         normal=cross / np.maximum(double_area, np.finfo(np.float64).tiny)[:, None], surface=owner,
         node_bounds=bounds, node_first=first.astype(np.int64), node_count=node_count.astype(np.int64),
         reflectance=reflectance, light=light, holdout=np.array([bool(s.holdout) for s in surfaces], dtype=bool),
+        camera=np.array([bool(s.camera) for s in surfaces], dtype=bool), uv=uv, **_textures(surfaces),
         of_light=of_light, area=area,
         emitter_cdf=np.concatenate(cdfs), emitter_triangle=np.concatenate(bins), emitter_offset=emitter_offset,
         emitter_count=emitter_count)

@@ -175,6 +175,22 @@ class Light:
 
 
 @dataclass(frozen=True, eq=False)
+class Texture:
+    """An image on a surface's triangles through UVs, as Blender's Image Texture node reads it: a texel's colour
+    is the Lambertian albedo's colour (its spectrum: `texel_spectra`), replacing the surface's `reflectance`.
+    `image[row, column]` is a colour in [0, 1] (linear Rec.709, or sRGB-encoded: `srgb`) with row 0 at the top (v = 1) and column 0 at u = 0; `uv`
+    holds each of the surface's triangles' corners' (u, v), in the order of `Surface.triangles`. `extension`
+    (Repeat, Extend, Clip: black outside) and `interpolation` (Linear, Closest) have Blender's meanings. With `srgb`
+    the texels are sRGB-encoded (an 8-bit sRGB image's) and decoded after interpolation, as Cycles reads them."""
+
+    image: np.ndarray  # (H, W, 3) float32
+    uv: np.ndarray  # (T, 3, 2) float64
+    extension: str = "REPEAT"  # one of kernels.layout.TEXTURE_EXTENSIONS
+    interpolation: str = "Linear"  # one of kernels.layout.TEXTURE_INTERPOLATIONS
+    srgb: bool = False  # texels sRGB-encoded, decoded after interpolation
+
+
+@dataclass(frozen=True, eq=False)
 class Surface:
     """An opaque triangle mesh in world space: a Lambertian reflector on both sides, and optionally an
     emitter (a mesh light). `reflectance` is the albedo ρ(λ) in [0, 1], the BRDF ρ/π; `emission` the
@@ -183,7 +199,10 @@ class Surface:
     and ignored: they are never hit and emit nothing. A `holdout` surface, as Cycles' Holdout (shader or object
     property), cuts a hole where a camera ray reaches it (directly or through a volume), before any scattering:
     zero colour behind what lies in front, and zero alpha with Film ▸ Transparent (black without); rays after a
-    scattering see it as its reflectance and emission say (a Holdout shader's surface: reflectance 0)."""
+    scattering see it as its reflectance and emission say (a Holdout shader's surface: reflectance 0). A surface
+    that is not `camera` visible (Cycles' Indirect Only collections, Ray Visibility ▸ Camera off) is passed by camera
+    rays (directly or through a volume) and seen by every ray after a scattering, and by shadow rays. A `texture`
+    replaces `reflectance` with its texels' colours."""
 
     name: str
     vertices: np.ndarray  # (V, 3) float64, world space
@@ -191,6 +210,8 @@ class Surface:
     reflectance: Spectrum  # Lambertian albedo over the wavelength grid, in [0, 1]
     emission: Spectrum | None = None  # radiance leaving both sides, None: not a light
     holdout: bool = False  # camera rays see a hole here (Film ▸ Transparent: alpha 0)
+    camera: bool = True  # camera rays see it (False: they pass it)
+    texture: Texture | None = None  # the albedo's image through UVs (None: `reflectance` everywhere)
     object: str = ""  # its Blender object's name, for Cryptomatte ("": the surface's name)
     material: str = ""  # its material's name, for Cryptomatte ("": the surface's name)
 

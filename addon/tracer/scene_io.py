@@ -19,7 +19,7 @@ from .film import check_film_memory, film_bytes
 from .grids import load_grid, save_grid_npy
 from .kernels.layout import LIGHT_KINDS
 from .scene import (RADIANT_UNITS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
-                    RenderSettings, Scene, Surface)
+                    RenderSettings, Scene, Surface, Texture)
 from .spectra import Spectrum
 from .wavelengths import GRID
 from .validation import validate
@@ -56,7 +56,8 @@ _LIGHT_FIELDS = {
 }
 _ENVMAP_UNIT = "radiant"  # an envmap's only unit (its strength multiplies its map), so the file may omit it
 _SURFACE = {"required": ("reflectance",), "optional": ("name", "object", "material", "vertices", "triangles", "mesh",
-                                                  "emission", "holdout")}
+                                                  "emission", "holdout", "camera", "texture")}
+_TEXTURE = {"required": ("image", "uv"), "optional": ("extension", "interpolation", "srgb")}
 _RENDER = {"required": (), "optional": tuple(f.name for f in fields(RenderSettings))}
 
 
@@ -295,8 +296,19 @@ def _surface(value, where: str, folder: Path) -> Surface:
     return Surface(name=name, vertices=vertices, triangles=triangles,
                    reflectance=_spectrum(data["reflectance"], f"{where}.reflectance", folder),
                    emission=None if emission is None else _spectrum(emission, f"{where}.emission", folder),
-                   holdout=data.get("holdout", False), object=data.get("object", ""),
-                   material=data.get("material", ""))
+                   holdout=data.get("holdout", False), camera=data.get("camera", True),
+                   texture=_texture(data["texture"], f"{where}.texture", folder) if "texture" in data else None,
+                   object=data.get("object", ""), material=data.get("material", ""))
+
+
+def _texture(value, where: str, folder: Path) -> Texture:
+    """A surface's texture: its image and its triangles' corners' UVs as `.npy` files named relative to the
+    scene's folder; `validation.validate` checks the values."""
+    data = _fields(value, where, _TEXTURE)
+    return Texture(image=_image(data["image"], f"{where}.image", folder), uv=_image(data["uv"], f"{where}.uv", folder),
+                   extension=data.get("extension", Texture.extension),
+                   interpolation=data.get("interpolation", Texture.interpolation),
+                   srgb=data.get("srgb", Texture.srgb))
 
 
 def _mesh_array(value, where: str, folder: Path) -> np.ndarray:
@@ -545,6 +557,16 @@ def _surface_json(surface: Surface, index: int, folder: Path) -> dict:
         data["emission"] = _spectrum_json(surface.emission)
     if surface.holdout:
         data["holdout"] = True
+    if not surface.camera:
+        data["camera"] = False
+    if surface.texture is not None:
+        texture = surface.texture
+        data["texture"] = {"image": f"surfaces{index}_texture.npy", "uv": f"surfaces{index}_uv.npy",
+                           "extension": texture.extension, "interpolation": texture.interpolation}
+        if texture.srgb:
+            data["texture"]["srgb"] = True
+        np.save(folder / data["texture"]["image"], np.asarray(texture.image, dtype=np.float32), allow_pickle=False)
+        np.save(folder / data["texture"]["uv"], np.asarray(texture.uv, dtype=np.float64), allow_pickle=False)
     data.update({key: getattr(surface, key) for key in ("object", "material") if getattr(surface, key)})
     return data
 
@@ -587,6 +609,9 @@ def validate_scene(path) -> list[str]:
     lines += [_describe_light(light) for light in scene.lights]
     lines += [f"surface {surface.name!r}: {len(surface.triangles)} triangles"
               + (", emissive" if surface.emission is not None else "") + (", holdout" if surface.holdout else "")
+              + ("" if surface.camera else ", unseen by the camera")
+              + (f", a {surface.texture.image.shape[1]} × {surface.texture.image.shape[0]} texture"
+                 if surface.texture is not None else "")
               for surface in scene.surfaces]
     s = scene.settings
     lines.append(

@@ -11,12 +11,13 @@ import numpy as np
 from . import backends, checks, colorimetry
 from .colorimetry import CMF_NAMES as CMFS
 from .errors import SpectralError
-from .kernels.layout import AREA_SHAPES, CAMERA_KINDS, LIGHT_KINDS, PHASES, WAVELENGTHS_PER_PATH
+from .kernels.layout import (AREA_SHAPES, CAMERA_KINDS, LIGHT_KINDS, PHASES, TEXTURE_EXTENSIONS, TEXTURE_INTERPOLATIONS,
+                             WAVELENGTHS_PER_PATH)
 from .lights import peak_emission
 from .phase import HG_G_LIMIT
 from .scene import (DEPTH_MAX, LIGHT_UNITS, RADIANT_UNITS, SEED_MAX, SENSOR_FITS, SPP_MAX,
                     WAVELENGTH_SAMPLINGS, BlackbodyEmission, Camera, Fluorescence, Glow, Grid, Light, Medium,
-                    RenderSettings, Scene, Surface)
+                    RenderSettings, Scene, Surface, Texture)
 from .spectra import Spectrum
 from .wavelengths import GRID, LAMBDA_MAX, LAMBDA_MIN
 
@@ -123,9 +124,39 @@ def _check_surface(surface: Surface, where: str) -> None:
                             f"{vertices.shape[0]} vertices (indices count from 0)")
     checks.spectrum_within(surface.reflectance.values, f"{where}.reflectance", "a reflectance must be within [0, 1]",
                            0.0, 1.0)
+    _check_boolean(surface.camera, f"{where}.camera")
+    if surface.texture is not None:
+        _check_texture(surface.texture, triangles.shape[0], f"{where}.texture")
     if surface.emission is not None:
         checks.spectrum_within(surface.emission.values, f"{where}.emission", "an emission must not be negative",
                                0.0, np.inf)
+
+
+def _check_texture(texture: Texture, triangles: int, where: str) -> None:
+    """A surface's texture: an (H, W, 3) image of texels within [0, 1], a (u, v) per corner of each of the
+    surface's `triangles`, all finite, and Blender's names for its extension and interpolation."""
+    if not isinstance(texture, Texture):
+        raise SpectralError(f"{where}: expected a texture (image, uv, extension, interpolation), found "
+                            f"{checks.shown(texture)}")
+    image = _float_array(lambda: texture.image, f"{where}.image")
+    if image.ndim != 3 or image.shape[0] < 1 or image.shape[1] < 1 or image.shape[2] != 3:
+        raise SpectralError(f"{where}.image: expected an array of H ≥ 1 rows, W ≥ 1 columns and 3 channels "
+                            f"(R, G, B), found shape {image.shape}")
+    bad = ~np.isfinite(image) | (image < 0.0) | (image > 1.0)
+    if bad.any():
+        at = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise SpectralError(f"{where}.image: a reflectance texel must be a finite colour within [0, 1], found "
+                            f"{image[at]:g} at texel [row, column, channel] {list(at)}")
+    uv = _float_array(lambda: texture.uv, f"{where}.uv")
+    if uv.shape != (triangles, 3, 2):
+        raise SpectralError(f"{where}.uv: expected a (u, v) for each corner of the surface's {triangles} triangles, "
+                            f"shape ({triangles}, 3, 2), found shape {uv.shape}")
+    if not np.isfinite(uv).all():
+        at = tuple(int(i) for i in np.argwhere(~np.isfinite(uv))[0])
+        raise SpectralError(f"{where}.uv: must be finite, found {uv[at]:g} at [triangle, corner, u/v] {list(at)}")
+    checks.one_of(texture.extension, f"{where}.extension", TEXTURE_EXTENSIONS)
+    checks.one_of(texture.interpolation, f"{where}.interpolation", TEXTURE_INTERPOLATIONS)
+    _check_boolean(texture.srgb, f"{where}.srgb")
 
 
 def optical_depth(medium: Medium) -> float:

@@ -32,7 +32,8 @@ def _material(name, kind, **inputs):
 
 def test_film_transparent_and_every_kind_of_holdout_are_exported(factory):
     """Holdout by shader (black for indirect rays: reflectance 0), by the object's property, by a collection set
-    to Holdout (the object keeps its material for indirect rays); a mixed Holdout and Indirect Only named."""
+    to Holdout (the object keeps its material for indirect rays); a mixed Holdout named. A collection set to
+    Indirect Only and an object's Ray Visibility ▸ Camera off hide a surface from camera rays only."""
     factory.render.film_transparent = True
     bpy.data.objects.remove(bpy.data.objects["Cube"])
     grey = _material("Grey", "ShaderNodeBsdfDiffuse", Color=(0.5, 0.5, 0.5))
@@ -44,6 +45,7 @@ def test_film_transparent_and_every_kind_of_holdout_are_exported(factory):
     tree.links.new(tree.nodes.new("ShaderNodeBsdfDiffuse").outputs[0], tree.nodes["Mix Shader"].inputs[2])
     _plane("Mixed", location=(6.0, 0.0, 0.0), material=mixed)
     _plane("Plain", location=(9.0, 0.0, 0.0), material=grey)
+    _plane("Unseen", location=(12.0, 0.0, 0.0), material=grey).visible_camera = False
     for name, flag in (("Held", "holdout"), ("Indirect", "indirect_only")):
         collection = bpy.data.collections.new(name)
         factory.collection.children.link(collection)
@@ -61,7 +63,8 @@ def test_film_transparent_and_every_kind_of_holdout_are_exported(factory):
     np.testing.assert_allclose(surfaces["Property"].reflectance.values, surfaces["Plain"].reflectance.values)
     [warning] = export.warnings
     assert "material 'Half': Holdout mixed in at weight 0.5 rendered as a whole holdout" in warning
-    assert "object 'In Indirect': Indirect Only (its collection's) rendered as seen by the camera too" in warning
+    assert "Indirect" not in warning
+    assert {name for name, surface in surfaces.items() if not surface.camera} == {"In Indirect", "Unseen"}
     factory.render.film_transparent = False
     assert _export().scene.settings.transparent is False
 

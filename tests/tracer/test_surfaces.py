@@ -89,11 +89,11 @@ def test_hierarchy_finds_the_nearest_triangle_as_brute_force_does(count):
     expected_t, expected = _brute_force(lowered, origins, directions)
     hit = numba_backend._new_hit()
     for ray in range(len(origins)):
-        t, k = numba_backend._closest_hit(ks, *origins[ray], *directions[ray], np.inf, False, hit)
+        t, k = numba_backend._closest_hit(ks, *origins[ray], *directions[ray], np.inf, False, False, hit)
         assert k == expected[ray]
         if k >= 0:
             assert t == pytest.approx(expected_t[ray], rel=1e-12)
-        _, any_k = numba_backend._closest_hit(ks, *origins[ray], *directions[ray], np.inf, True, hit)
+        _, any_k = numba_backend._closest_hit(ks, *origins[ray], *directions[ray], np.inf, True, False, hit)
         assert (any_k >= 0) == (expected[ray] >= 0)
 
 
@@ -146,6 +146,23 @@ def test_plane_in_a_uniform_environment_reflects_albedo_times_its_radiance():
     (the environment below it is hidden: the surface is opaque)."""
     scene = s.scene(s.ortho_camera(8, 8, scale=4.0), [], [s.environment(1.0)], [ground()], spp=64, seed=3)
     assert_xyz(render(scene).film, ALBEDO.values)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_surface_the_camera_does_not_see_still_casts_its_shadow(backend):
+    """Indirect Only (`Surface.camera` off): a black square 1 above a grey ground over x < 0, under a sun at 45° from
+    +x, seen from straight above (x from −2 to 2). Its shadow covers x < −1 (0: no other light); the camera sees
+    through it to the lit ground at −1 < x < 0 (ρ E cos θ / π, where a square it saw would show black)."""
+    albedo = 0.5
+    hidden = s.parallelogram((-4.0, -4.0, 1.0), (4.0, 0, 0), (0, 8.0, 0), 1, reflectance=0.0, camera=False)
+    scene = s.scene(s.ortho_camera(8, 8, scale=4.0), [], [s.sun(direction(45.0, 90.0), 1.0)], [ground(albedo), hidden],
+                    spp=16 if backend == "numba" else 4, seed=5, backend=backend, passes=("Depth",))
+    result = render(scene)
+    np.testing.assert_allclose(result.film.xyz[:, :2, 1], 0.0, atol=1e-12)
+    lit = result.film.xyz[:, 2:, 1]
+    error = np.sqrt(result.film.variance[:, 2:, 1].sum()) / lit.size
+    assert error > 0 and abs(lit.mean() - expected_xyz(albedo * np.sin(np.radians(45.0)) / np.pi)[1]) <= 4.0 * error
+    np.testing.assert_allclose(result.passes.images["Depth"][..., 0], 6.0, rtol=1e-9)  # the passes see the ground
 
 
 def test_shadow_of_an_occluding_triangle_is_black():

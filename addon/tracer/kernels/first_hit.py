@@ -5,7 +5,8 @@ Each pixel-sample's camera ray is the path tracer's own (`geometry.camera_ray`, 
 same numbers of band 0's stream: `rng.low_discrepancy` dimensions 1 and 2), so the passes cover a pixel as the
 image does. For each ray: its camera-space depth and its distance from the camera (`geometry.camera_depths`),
 the world-space normal on the side facing the camera, and the triangle hit (-1 where none is, the depths then
-inf). Media are not seen: as in Cycles, only surfaces write these passes.
+inf). Media are not seen: as in Cycles, only surfaces write these passes, and only those camera rays see
+(`scene.Surface.camera`).
 
 `first_hits` walks the triangles' hierarchy with the path tracer's `numba_backend._closest_hit` and is cached
 with its kernel (`numba_cache`); its oracle is the NumPy backend's `first_hits` (every triangle tested). Both
@@ -45,7 +46,7 @@ def first_hits(camera, surfaces, x0, y0, width, height, sample_begin, sample_end
                 sample = sample_begin + index
                 ox, oy, oz, dx, dy, dz = camera_ray(ks, px, py, low_discrepancy(key, sample, 1),
                                                     low_discrepancy(key, sample, 2))
-                t, k = _closest_hit(ks, ox, oy, oz, dx, dy, dz, np.inf, False, hit)
+                t, k = _closest_hit(ks, ox, oy, oz, dx, dy, dz, np.inf, False, True, hit)
                 triangles[row, column, index] = k
                 out = values[row, column, index]
                 if k < 0:

@@ -17,6 +17,9 @@ PHASES = ("hg", "rayleigh")
 LIGHT_KINDS = ("sun", "environment", "sky", "point", "spot", "area", "envmap")
 AREA_SHAPES = ("rectangle", "ellipse")  # an area light's shape (a square and a disk are their equal-sided cases)
 WAVELENGTHS_PER_PATH = (1, 4)  # the hero alone, or the hero and 3 rotated wavelengths (spectral MIS)
+# A surface texture's reading outside [0, 1] of UV and between its texels, by Blender's names (Image Texture node).
+TEXTURE_EXTENSIONS = ("REPEAT", "EXTEND", "CLIP")
+TEXTURE_INTERPOLATIONS = ("Linear", "Closest")
 
 CAMERA_PERSPECTIVE = CAMERA_KINDS.index("perspective")
 PHASE_RAYLEIGH = PHASES.index("rayleigh")
@@ -30,6 +33,12 @@ LIGHT_ENVMAP = LIGHT_KINDS.index("envmap")
 # A kernel light that no scene file names: an emissive surface (`scene.Surface.emission`), lowered to one light.
 LIGHT_MESH = len(LIGHT_KINDS)
 AREA_ELLIPSE = AREA_SHAPES.index("ellipse")
+TEXTURE_REPEAT = TEXTURE_EXTENSIONS.index("REPEAT")
+TEXTURE_CLIP = TEXTURE_EXTENSIONS.index("CLIP")
+TEXTURE_LINEAR = TEXTURE_INTERPOLATIONS.index("Linear")
+# Nodes per axis of the RGB lattice whose reflectance spectra a texel's colour is interpolated between
+# (`texel_spectra`, `surfaces.rgb_reflectance`): 0, 1/8, ..., 1.
+RGB_LATTICE = 9
 MAX_WAVELENGTHS_PER_PATH = max(WAVELENGTHS_PER_PATH)
 # Shadow rays whose every transmittance is below this play Russian roulette, stopping with this probability.
 SHADOW_ROULETTE_BELOW, SHADOW_ROULETTE_STOP = 0.05, 0.75
@@ -175,6 +184,15 @@ class KernelSurfaces(NamedTuple):
     reflectance: np.ndarray  # (S, GRID) Lambertian albedo
     light: np.ndarray  # (S,) the kernel light (LIGHT_MESH) of an emissive surface, -1 for the others
     holdout: np.ndarray  # (S,) bool: camera rays that reach it see a hole (`kernels/transparency.py`)
+    camera: np.ndarray  # (S,) bool: camera rays see it (False: Indirect Only, Ray Visibility ▸ Camera off)
+    uv: np.ndarray  # (T, 6) each triangle's corners' u, v (zeros on a surface without a texture)
+    texture_offset: np.ndarray  # (S,) a textured surface's first texel in `texels`, -1 for a surface without one
+    texture_shape: np.ndarray  # (S, 2) its texture's rows and columns
+    # (S, 3) its extension (TEXTURE_EXTENSIONS), interpolation (TEXTURE_INTERPOLATIONS), and 1 where its texels are
+    # sRGB-encoded (decoded after interpolation, as Cycles decodes 8-bit sRGB images), else 0
+    texture_mode: np.ndarray
+    texels: np.ndarray  # (texels, 3) float32 in [0, 1], each texture's rows back to back, top row first
+    rgb_spectra: np.ndarray  # (RGB_LATTICE³ or 0, GRID) the reflectance of each RGB lattice node (`texel_spectra`)
     of_light: np.ndarray  # (NL,) the surface of each kernel light, -1 for lights that are not surfaces
     area: np.ndarray  # (S,) total area
     emitter_cdf: np.ndarray  # each emissive surface's cdf over its triangles by area, from 0 to 1, back to back

@@ -107,7 +107,8 @@ from .media import (
 from .numba_cache import cached
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 from .spectrum_bins import spectrum_bin, spectrum_weight
-from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
+from .surfaces import (emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, rgb_reflectance,
+                       texel_colour, triangle_distance)
 from .transparency import transparency_weight
 
 # Every kernel function divides as NumPy does (x/0 gives inf or nan, like the NumPy backend) instead of
@@ -477,10 +478,10 @@ def _inverse(d):
 
 
 @jit(inline="always")
-def _closest_hit(ks, ox, oy, oz, dx, dy, dz, t_max, any_hit, hit):
+def _closest_hit(ks, ox, oy, oz, dx, dy, dz, t_max, any_hit, camera, hit):
     """The nearest triangle along the ray o + t d with 0 < t < t_max, walking the hierarchy nearer child
     first: (t, triangle), or (t_max, -1) where none is. With `any_hit`, the first triangle found (a shadow
-    ray needs no more)."""
+    ray needs no more); a `camera` ray passes the surfaces camera rays do not see."""
     best_t, best = t_max, -1
     if ks.surfaces.node_count.shape[0] == 0:
         return best_t, best
@@ -499,7 +500,7 @@ def _closest_hit(ks, ox, oy, oz, dx, dy, dz, t_max, any_hit, hit):
         if count > 0:
             for k in range(first, first + count):
                 t = triangle_distance(ks, k, ox, oy, oz, dx, dy, dz)
-                if t < best_t:
+                if t < best_t and (not camera or ks.surfaces.camera[ks.surfaces.surface[k]]):
                     best_t, best = t, k
                     if any_hit:
                         return best_t, best
@@ -526,7 +527,7 @@ def _shadow_blocked(ks, ox, oy, oz, wx, wy, wz, distance, hit):
     if distance < INF:
         qx, qy, qz = ox + distance * wx, oy + distance * wy, oz + distance * wz
         t_max = distance - SURFACE_OFFSET * (1.0 + max(abs(qx), abs(qy), abs(qz)))
-    _, triangle = _closest_hit(ks, ox, oy, oz, wx, wy, wz, t_max, True, hit)
+    _, triangle = _closest_hit(ks, ox, oy, oz, wx, wy, wz, t_max, True, False, hit)
     return triangle >= 0
 
 
@@ -565,14 +566,20 @@ def _add_hit_light(scattered, survival, light_pdf, n, path, light):
 @jit(inline="always")
 def _arrive_at_surface(ks, triangle, px, py, pz, dx, dy, dz, n, path, hit):
     """A path reaching triangle `triangle` at p along d: the surface's normal on the path's side and its
-    reflectance at the path's wavelengths into `hit`; returns the point leaving it on that side, and whether
-    the surface reflects any of the path's light."""
+    reflectance at the path's wavelengths (a textured surface's at p) into `hit`; returns the point leaving it on
+    that side, and whether the surface reflects any of the path's light."""
     nx, ny, nz = facing_normal(ks, triangle, dx, dy, dz)
     hit.normal[0], hit.normal[1], hit.normal[2] = nx, ny, nz
     s = ks.surfaces.surface[triangle]
     reflects = False
+    if ks.surfaces.texture_offset[s] < 0:
+        for i in range(n):
+            hit.reflectance[i] = table_at(ks.surfaces.reflectance, s, on_grid(path.lams[i]))
+    else:
+        r, g, b = texel_colour(ks, s, triangle, px, py, pz)
+        for i in range(n):
+            hit.reflectance[i] = rgb_reflectance(ks.surfaces.rgb_spectra, r, g, b, on_grid(path.lams[i]))
     for i in range(n):
-        hit.reflectance[i] = table_at(ks.surfaces.reflectance, s, on_grid(path.lams[i]))
         if hit.reflectance[i] > 0.0 and path.beta[i] > 0.0:
             reflects = True
     ox, oy, oz = offset_point(px, py, pz, nx, ny, nz)
@@ -1144,7 +1151,7 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, ver
             emitted = False
             if not _survives_roulette(ks, depth, n, path):
                 return
-        t_hit, triangle = _closest_hit(ks, ox, oy, oz, dx, dy, dz, INF, False, hit)
+        t_hit, triangle = _closest_hit(ks, ox, oy, oz, dx, dy, dz, INF, False, not scattered, hit)
         controls = grey and scattered
         event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, t_hit, depth, controls, scattered, n,
                                                     path, vertex, tracker, fl, light)

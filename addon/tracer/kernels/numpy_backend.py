@@ -54,7 +54,8 @@ from .light_split import (
 from .lookups import on_grid, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 from .spectrum_bins import spectrum_bin, spectrum_weight
-from .surfaces import emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, triangle_distance
+from .surfaces import (emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, rgb_reflectance,
+                       texel_colour, triangle_distance)
 from .transparency import transparency_weight
 
 CHUNK_PATHS = 65536  # paths traced together: bounds the memory of a large tile
@@ -372,18 +373,21 @@ def _area_lights_seen(ks, paths, rows, lights, distance, radiance):
 
 # ----------------------------------------------------------------------------- surfaces
 
-def _closest_hits(ks, origins, directions, t_max):
+def _closest_hits(ks, origins, directions, t_max, camera=False):
     """(t, triangle) of the nearest triangle along each ray with 0 < t < t_max (t_max and -1 where none is), by
-    testing every triangle (in chunks of about CHUNK_PAIRS ray–triangle pairs)."""
+    testing every triangle (in chunks of about CHUNK_PAIRS ray–triangle pairs); rays that are `camera` rays (a
+    mask, or one value for all) pass the surfaces camera rays do not see."""
     count, triangles = origins.shape[0], ks.surfaces.corner.shape[0]
     best_t, best = np.broadcast_to(t_max, (count,)).astype(np.float64), np.full(count, -1, dtype=np.int64)
     if not triangles or not count:
         return best_t, best
     step = max(1, CHUNK_PAIRS // count)
     o, d = _columns(origins[:, :, None]), _columns(directions[:, :, None])
+    passing = np.broadcast_to(np.asarray(camera), (count,))[:, None]
     for first in range(0, triangles, step):
         k = np.arange(first, min(first + step, triangles))
         t = triangle_distance(ks, k[None, :], *o, *d)
+        t = np.where(passing & ~ks.surfaces.camera[ks.surfaces.surface[k]][None, :], np.inf, t)
         nearest = np.argmin(t, axis=1)
         t = t[np.arange(count), nearest]
         closer = t < best_t
@@ -403,7 +407,7 @@ def first_hits(camera, surfaces, x0, y0, width, height, sample_begin, sample_end
         sample = (sample_begin + index.ravel()).astype(np.uint64)
         u1, u2 = low_discrepancy(keys, sample, np.uint64(1)), low_discrepancy(keys, sample, np.uint64(2))
     ray = np.broadcast_arrays(*camera_ray(ks, px, py, u1, u2), np.zeros(px.size))[:6]
-    t, k = _closest_hits(ks, np.stack(ray[:3], axis=1), np.stack(ray[3:], axis=1), np.inf)
+    t, k = _closest_hits(ks, np.stack(ray[:3], axis=1), np.stack(ray[3:], axis=1), np.inf, camera=True)
     hit = k >= 0
     depth, distance = camera_depths(camera.to_world, camera.kind, t, *ray[3:])
     normal = np.stack(facing_normal(ks, np.maximum(k, 0), *ray[3:]), axis=1) * hit[:, None]
@@ -447,7 +451,13 @@ def _arrive_at_surfaces(ks, paths, triangle, distance):
     points = paths.o + distance[:, None] * paths.d
     normal = _rows(facing_normal(ks, triangle, *_columns(paths.d)), len(paths))
     paths.normal = normal
-    paths.reflectance = table_at(ks.surfaces.reflectance, ks.surfaces.surface[triangle][:, None], on_grid(paths.lams))
+    surface = ks.surfaces.surface[triangle]
+    paths.reflectance = table_at(ks.surfaces.reflectance, surface[:, None], on_grid(paths.lams))
+    textured = np.flatnonzero(ks.surfaces.texture_offset[surface] >= 0)
+    if textured.size:
+        rgb = texel_colour(ks, surface[textured], triangle[textured], *_columns(points[textured]))
+        paths.reflectance[textured] = rgb_reflectance(ks.surfaces.rgb_spectra, *(c[:, None] for c in rgb),
+                                                      on_grid(paths.lams[textured]))
     paths.o = _rows(offset_point(*_columns(points), *_columns(normal)), len(paths))
     paths.on_surface = np.ones(len(paths), dtype=bool)
     return np.any((paths.reflectance > 0.0) & (paths.beta > 0.0), axis=1)
@@ -830,7 +840,7 @@ def _bounce(ks, paths, radiance, fl, transparent, marks=None):
     """Every live path to its next scattering vertex (in a medium or on a surface) and past it; returns the
     paths still alive. Camera paths that see through add to `transparent` (`_holes`); with `marks`, they take
     their marks (`_Marks`)."""
-    t_hit, triangle = _closest_hits(ks, paths.o, paths.d, INF)
+    t_hit, triangle = _closest_hits(ks, paths.o, paths.d, INF, camera=~paths.scattered)
     vertex = _free_flight(ks, paths, radiance, fl, t_hit)
     escaped = vertex.event == EVENT_ESCAPE
     sky, surface = escaped & (triangle < 0), escaped & (triangle >= 0)

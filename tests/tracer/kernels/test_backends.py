@@ -195,6 +195,20 @@ def transparent_holdout():
     return s.scene(s.perspective_camera(8, 8, fov_degrees=50.0), [medium], lights, [floor, hole], transparent=True)
 
 
+def textured_indirect_only():
+    """A textured floor (Linear, Repeat, its image repeated twice across it) under a chromatic medium, and a square
+    the camera does not see (Indirect Only) between them, under a finite sun and an environment."""
+    medium = s.medium(s.box_grid(), extinction=s.smooth_ramp(1.5, 0.5), albedo=0.9, g=0.3)
+    rng = np.random.default_rng(5)
+    floor = s.parallelogram((-3.0, -3.0, -0.4), (6.0, 0.0, 0.0), (0.0, 6.0, 0.0), 2, name="floor",
+                            image=rng.uniform(0.0, 1.0, (5, 3, 3)))
+    floor = dataclasses.replace(floor, texture=dataclasses.replace(floor.texture, uv=floor.texture.uv * 2.0))
+    hidden = s.parallelogram((-2.0, -2.0, 0.8), (2.5, 0.0, 0.0), (0.0, 3.0, 0.0), 1, reflectance=0.7,
+                             camera=False, name="hidden")
+    lights = [s.sun([0.3, 0.2, 1.0], 2.0, angle=0.2), s.environment(0.4)]
+    return s.scene(s.perspective_camera(8, 8, fov_degrees=50.0), [medium], lights, [floor, hidden])
+
+
 LIGHT_PASSES = ("Emission", "Environment", "Volume Direct", "Volume Indirect")
 
 
@@ -221,7 +235,7 @@ def fluorescent_light_passes():
 SCENES = {build.__name__: build for build in (grey_furnace, chromatic, heterogeneous, fluorescence, blackbody,
                                               glow, rayleigh, two_media, point_and_spot, area_lights, envmap,
                                               surfaces, mesh_light, transparent_holdout, light_passes,
-                                              fluorescent_light_passes)}
+                                              fluorescent_light_passes, textured_indirect_only)}
 
 
 def render_film(scene, backend, seed, spp=SPP) -> Film:
