@@ -22,6 +22,7 @@ What the copy changes (`REPLACEMENTS`, each refused when the kernel no longer co
 
 import argparse
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -181,19 +182,23 @@ def launch_arguments(ks, spp, seed):
 
 
 def state_bytes(module, max_media):
-    """Bytes of one thread's path state (every `_new_*` buffer), from the shapes the copy gives them."""
-    shapes = {"Path": [(4,), *[(module.MAX_LAMBDAS,)] * 3, (max_media, module.SPEC_ROWS, module.MAX_LAMBDAS),
-                       *[(module.MAX_LAMBDAS,)] * 4, (1,), (module.MARKS, module.MAX_LAMBDAS), (2,)],
-              "Coefficients": [*[(module.MAX_LAMBDAS,)] * 3, *[(max_media, module.MAX_LAMBDAS)] * 2, (1,)],
-              "LightSample": [(module.MAX_LAMBDAS,)] * 6,
-              "Tracker": [(max_media, module.TRACKER_INTS), (max_media, module.TRACKER_FLOATS)],
-              "Fluorescent": [(module.RESERVOIRS,), (module.RESERVOIRS, 3), (module.RESERVOIRS, module.MAX_LAMBDAS),
-                              (module.RESERVOIRS, 2), (module.RESERVOIRS,), (1,), *[(module.MAX_LAMBDAS,)] * 2],
-              "Hit": [(module.BVH_STACK,), (module.BVH_STACK,), (3,), (module.MAX_LAMBDAS,)]}
-    return {name: 8 * sum(int(np.prod(shape)) for shape in arrays) for name, arrays in shapes.items()}
+    """Bytes of one thread's path state: each `_new_*` constructor of the copy, run in Python (NumPy arrays of the
+    shapes its local arrays have)."""
+    constructors = {"Path": module._new_path(max_media), "Coefficients": module._new_coefficients(max_media),
+                    "LightSample": module._new_light_sample(), "Tracker": module._new_tracker(max_media),
+                    "Fluorescent": module._new_fluorescent(), "Hit": module._new_hit()}
+    return {name: sum(array.nbytes for array in state) for name, state in constructors.items()}
+
+
+def print_state(max_media):
+    sizes = state_bytes(path_kernel(max_media), max_media)
+    print(f"path state per thread (MAX_MEDIA {max_media}): "
+          + ", ".join(f"{name} {size} B" for name, size in sizes.items()) + f"; {sum(sizes.values())} B in all")
 
 
 def compile_and_assemble(max_media):
+    from numba import typeof
+
     from addon.tracer.kernels import cuda_target
     from addon.tracer.lowering import compile_scene
 
@@ -203,8 +208,6 @@ def compile_and_assemble(max_media):
     module = path_kernel(max_media)
     ks = compile_scene(tiny_scene())
     start = time.perf_counter()
-    from numba import typeof
-
     argument_types = tuple(typeof(value) for value in launch_arguments(ks, 1, 0))
     ptx, _ = cuda_target.compile_ptx(module.render_samples, argument_types)
     seconds = time.perf_counter() - start
@@ -215,15 +218,12 @@ def compile_and_assemble(max_media):
     start = time.perf_counter()
     resources = cuda_target.assemble(ptx)
     assembly = time.perf_counter() - start
-    functions = ptx.count(".func ") + ptx.count(".entry ")
+    functions = set(re.findall(r"^(?:\.visible\s+)?\.(?:func|entry)\s+(?:\([^)]*\)\s*)?(\w+)", ptx, re.M))
     print(f"render_samples (MAX_MEDIA {max_media}): "
-          f"compile {seconds:.1f} s, PTX {len(ptx) / 1024:.0f} KiB, {functions} functions, "
+          f"compile {seconds:.1f} s, PTX {len(ptx) / 1024:.0f} KiB, {len(functions)} functions, "
           f"{'ALLOCATES' if allocates else 'no allocation'}; ptxas {assembly:.1f} s: {resources['registers']} "
           f"registers, {resources['stack']} B stack, {resources['spills']} B spilled, {resources['constant']} B "
           f"constant")
-    sizes = state_bytes(module, max_media)
-    print("path state per thread: " + ", ".join(f"{name} {size} B" for name, size in sizes.items())
-          + f"; {sum(sizes.values())} B in all")
     return ptx, resources
 
 
@@ -273,7 +273,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--max-media", type=int, default=MAX_MEDIA)
     parser.add_argument("--simulate", action="store_true", help="compare the simulator with the CPU kernel")
-    parser.add_argument("--no-compile", action="store_true", help="skip the PTX compile (with --simulate)")
+    parser.add_argument("--no-compile", action="store_true", help="skip the PTX compile")
     parser.add_argument("--spp", type=int, default=2)
     parser.add_argument("--seed", type=int, default=7)
     parser.add_argument("--child", help=argparse.SUPPRESS)  # the simulator's process: writes its sums here
@@ -289,6 +289,7 @@ def main(argv=None):
         return
     if not args.no_compile:
         compile_and_assemble(args.max_media)
+    print_state(args.max_media)
     if args.simulate:
         compare(args.spp, args.seed, args.max_media)
 
