@@ -132,16 +132,22 @@ def _check_surface(surface: Surface, where: str) -> None:
                                0.0, np.inf)
 
 
+def _rgb_image(get, where: str, least_columns: int) -> np.ndarray:
+    """An (H, W, 3) RGB image (an envmap's, a texture's) as a float array: H ≥ 1 rows, W ≥ `least_columns`."""
+    image = _float_array(get, where)
+    if image.ndim != 3 or image.shape[0] < 1 or image.shape[1] < least_columns or image.shape[2] != 3:
+        raise SpectralError(f"{where}: expected an array of H ≥ 1 rows, W ≥ {least_columns} columns and 3 channels "
+                            f"(R, G, B), found shape {image.shape}")
+    return image
+
+
 def _check_texture(texture: Texture, triangles: int, where: str) -> None:
     """A surface's texture: an (H, W, 3) image of texels within [0, 1], a (u, v) per corner of each of the
     surface's `triangles`, all finite, and Blender's names for its extension and interpolation."""
     if not isinstance(texture, Texture):
         raise SpectralError(f"{where}: expected a texture (image, uv, extension, interpolation), found "
                             f"{checks.shown(texture)}")
-    image = _float_array(lambda: texture.image, f"{where}.image")
-    if image.ndim != 3 or image.shape[0] < 1 or image.shape[1] < 1 or image.shape[2] != 3:
-        raise SpectralError(f"{where}.image: expected an array of H ≥ 1 rows, W ≥ 1 columns and 3 channels "
-                            f"(R, G, B), found shape {image.shape}")
+    image = _rgb_image(lambda: texture.image, f"{where}.image", least_columns=1)
     bad = ~np.isfinite(image) | (image < 0.0) | (image > 1.0)
     if bad.any():
         at = tuple(int(i) for i in np.argwhere(bad)[0])
@@ -288,10 +294,7 @@ def _check_envmap(light: Light, where: str) -> None:
     if light.unit != "radiant":
         raise SpectralError(f"{where}.unit: an envmap's strength multiplies its map (radiance = strength × Σ rgb · "
                             f"basis): its unit must be \"radiant\", found {checks.shown(light.unit)}")
-    image = _float_array(lambda: light.image, f"{where}.image")
-    if image.ndim != 3 or image.shape[0] < 1 or image.shape[1] < 2 or image.shape[2] != 3:
-        raise SpectralError(f"{where}.image: expected an array of H ≥ 1 rows, W ≥ 2 columns and 3 channels (R, G, "
-                            f"B), found shape {image.shape}")
+    image = _rgb_image(lambda: light.image, f"{where}.image", least_columns=2)
     with np.errstate(over="ignore"):  # the kernels read it as float32: a value beyond float32 is inf, refused
         _check_finite_nonnegative(image.astype(np.float32), f"{where}.image", "texel [row, column, channel]")
     basis = _float_array(light.basis_values, f"{where}.basis")

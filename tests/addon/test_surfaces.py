@@ -189,16 +189,22 @@ def test_a_volume_casts_its_shadow_on_a_diffuse_ground_as_in_cycles(factory, tmp
     assert result.delta_e < GREY_DELTA_E and result.z < NOISE_BOUND
 
 
-def test_a_coloured_ground_under_a_sun_matches_cycles(factory, tmp_path):
-    """A green Lambertian ground under a sun of 3 W/m² at 40° elevation, no World: one bounce, so the
-    upsampled reflectance under the sun gives the RGB's colour (ΔE00 within the coloured bound)."""
+def only_a_sun(factory, tilt_degrees):
+    """The factory scene's light, cube and World's light replaced by a sun of 3 W/m² (no disc) tilted
+    `tilt_degrees` from straight down."""
     bpy.data.objects.remove(bpy.data.objects["Light"])
     bpy.data.objects.remove(bpy.data.objects["Cube"])
     factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
     factory.collection.objects.link(sun)
     sun.data.energy, sun.data.angle = 3.0, 0.0
-    sun.rotation_euler = (math.radians(50), 0.0, math.radians(30))
+    sun.rotation_euler = (math.radians(tilt_degrees), 0.0, math.radians(30))
+
+
+def test_a_coloured_ground_under_a_sun_matches_cycles(factory, tmp_path):
+    """A green Lambertian ground under a sun of 3 W/m² at 40° elevation, no World: one bounce, so the
+    upsampled reflectance under the sun gives the RGB's colour (ΔE00 within the coloured bound)."""
+    only_a_sun(factory, tilt_degrees=50)
     _ground((0.2, 0.6, 0.1))
     camera = factory.camera
     camera.location, camera.rotation_euler = (0.0, 0.0, 5.0), (0.0, 0.0, 0.0)  # the ground fills the frame

@@ -11,7 +11,7 @@ import pytest
 from addon.cycles_emulation.job import EmulationJob
 from addon.cycles_emulation.surfaces import TEXTURED_WARNING
 from tests.addon.test_blender_scene import factory_scene
-from tests.addon.test_surfaces import COLOURED_DELTA_E, _export, _plane, _surface_shader
+from tests.addon.test_surfaces import COLOURED_DELTA_E, _export, _plane, _surface_shader, only_a_sun
 from tests.support.cycles import NOISE_BOUND, compare
 
 bpy = pytest.importorskip("bpy")
@@ -135,13 +135,7 @@ def test_what_is_not_rendered_is_named(factory, tmp_path):
 def _textured_ground_under_a_sun(factory):
     """The 8 × 4 image repeated twice across a 4 × 4 plane (the Texture Coordinate node's UV through a Mapping node's
     scale 2, Repeat, Linear) on a Diffuse BSDF's Color, under a sun at 50°, no World, seen from above."""
-    bpy.data.objects.remove(bpy.data.objects["Light"])
-    bpy.data.objects.remove(bpy.data.objects["Cube"])
-    factory.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
-    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
-    factory.collection.objects.link(sun)
-    sun.data.energy, sun.data.angle = 3.0, 0.0
-    sun.rotation_euler = (math.radians(40), 0.0, math.radians(30))
+    only_a_sun(factory, tilt_degrees=40)
     material, node = _textured()
     mapping = material.node_tree.nodes.new("ShaderNodeMapping")
     mapping.inputs["Scale"].default_value = (2.0, 2.0, 1.0)
