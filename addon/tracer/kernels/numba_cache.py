@@ -52,8 +52,9 @@ PREBUILT = TRACER / "kernels" / "prebuilt"  # the portable kernel the extension'
 NO_PREBUILT_VARIABLE = "SPECTRAL_VOLUME_NO_PREBUILT"  # set (to anything) to never load it
 PORTABLE_CPU = {"cpu": "generic", "cpu_features": ""}  # what Numba compiles for under NUMBA_CPU_NAME=generic
 COMPILE_SECONDS_FILE = "compile-seconds.txt"  # in the cache root: how long the last compile on this machine took
-LOADING_MESSAGE = "Loading the kernel…"
-COMPILING = "Compiling the kernel"
+KERNEL = "kernel"  # what the notices call the CPU kernel (`ready`'s `kernel` names another, e.g. a GPU kernel)
+LOADING_MESSAGE = f"Loading the {KERNEL}…"
+COMPILING = f"Compiling the {KERNEL}"
 NOTICES = (LOADING_MESSAGE, COMPILING)  # how every notice of `ready` begins
 NOTICE_AFTER_SECONDS = 1.0  # loading a cached kernel usually takes less; compiling it takes minutes
 POLL_SECONDS = 0.05
@@ -125,11 +126,11 @@ def kernel_folder(root: Path | None = None, key: dict | None = None) -> Path:
     return (root or user_cache_root()) / f"kernels-{hashlib.sha256(text.encode()).hexdigest()[:16]}"
 
 
-def _usable_folder() -> Path | None:
-    """The current key's folder, created and marked as used where it can be written; None when it neither
-    exists nor can be made."""
+def usable_folder(extra_key: dict | None = None) -> Path | None:
+    """The current key's folder (with `extra_key`'s items added to the key), created and marked as used where it
+    can be written; None when it neither exists nor can be made."""
     try:
-        key = cache_key()
+        key = {**cache_key(), **(extra_key or {})}
         folder = kernel_folder(key=key)
     except OSError:  # the sources cannot be read to key it
         return None
@@ -288,7 +289,7 @@ class _PortableCache(KernelCache):
 def cached(dispatcher):
     """Give a Numba dispatcher (a kernel declared without `cache=True`) the kernel cache, or no cache
     when the folder cannot be written; with the shipped portable kernel behind it when there is one."""
-    _Locator.folder = _usable_folder()
+    _Locator.folder = usable_folder()
     _PortableLocator.folder = prebuilt_folder()
     try:
         portable = _PortableCache(dispatcher.py_func) if _PortableLocator.folder is not None else None
@@ -318,35 +319,40 @@ def _prefer_host(dispatcher) -> None:
         cache.portable_signatures.clear()
 
 
-def compile_seconds() -> float | None:
+def _seconds_file(kernel: str) -> Path:
+    name = COMPILE_SECONDS_FILE if kernel == KERNEL else f"compile-seconds-{kernel.replace(' ', '-')}.txt"
+    return user_cache_root() / name
+
+
+def compile_seconds(kernel: str = KERNEL) -> float | None:
     """How long the kernel took to compile the last time it compiled on this computer (None before)."""
     try:
-        return float((user_cache_root() / COMPILE_SECONDS_FILE).read_text())
+        return float(_seconds_file(kernel).read_text())
     except (OSError, ValueError):
         return None
 
 
-def record_compile_seconds(seconds: float) -> None:
+def record_compile_seconds(seconds: float, kernel: str = KERNEL) -> None:
     try:
-        (user_cache_root() / COMPILE_SECONDS_FILE).write_text(f"{seconds:.1f}\n")
+        _seconds_file(kernel).write_text(f"{seconds:.1f}\n")
     except OSError:
         pass
 
 
-def compiling_message() -> str:
+def compiling_message(kernel: str = KERNEL) -> str:
     """What the user is told while the kernel compiles: as long as the last compile here took, if timed."""
-    seconds = compile_seconds()
+    seconds = compile_seconds(kernel)
     if seconds is None:
-        return f"{COMPILING} (the first time on this machine)…"
-    return f"{COMPILING} (about {seconds:.0f} s on this machine)…"
+        return f"Compiling the {kernel} (the first time on this machine)…"
+    return f"Compiling the {kernel} (about {seconds:.0f} s on this machine)…"
 
 
-def ready(dispatcher, prepare, cancel=None, notice=None) -> bool:
+def ready(dispatcher, prepare, cancel=None, notice=None, kernel: str = KERNEL) -> bool:
     """Run `prepare()`, which compiles `dispatcher` or loads it from the cache, in a helper thread while
     asking `cancel()`; if it takes longer than NOTICE_AFTER_SECONDS, tell `notice` whether it loads
-    (LOADING_MESSAGE) or compiles (`compiling_message()`; Numba counts a cache miss before it compiles),
-    again when that changes. Returns False when cancelled first (the compile goes on in the background
-    and fills the cache). A portable kernel in use is replaced by the host's once that is cached."""
+    ("Loading the `kernel`…") or compiles (`compiling_message(kernel)`; Numba and numba-cuda count a cache miss
+    before they compile), again when that changes. Returns False when cancelled first (the compile goes on in the
+    background and fills the cache). A portable kernel in use is replaced by the host's once that is cached."""
     _prefer_host(dispatcher)
     misses = sum(dispatcher.stats.cache_misses.values())
     failure = []
@@ -368,10 +374,10 @@ def ready(dispatcher, prepare, cancel=None, notice=None) -> bool:
         if notice is not None and helper.is_alive() and time.perf_counter() - start > NOTICE_AFTER_SECONDS:
             compiling = sum(dispatcher.stats.cache_misses.values()) > misses
             if told != compiling:
-                notice(compiling_message() if compiling else LOADING_MESSAGE)
+                notice(compiling_message(kernel) if compiling else f"Loading the {kernel}…")
                 told = compiling
     if failure:
         raise failure[0]
     if sum(dispatcher.stats.cache_misses.values()) > misses:
-        record_compile_seconds(time.perf_counter() - start)
+        record_compile_seconds(time.perf_counter() - start, kernel)
     return True

@@ -189,7 +189,7 @@ def test_a_read_only_cache_holding_the_kernel_is_read(monkeypatch, tmp_path, wri
     assert again(2.5) == 3.5 and compiles(again) == 1  # a new signature compiles; not saving it is no error
 
 
-def waited_for(dispatcher, monkeypatch) -> list[str]:
+def waited_for(dispatcher, monkeypatch, name=numba_cache.KERNEL) -> list[str]:
     """The notices `ready` gives while `dispatcher(1)` is made ready, from the first poll on (the helper
     thread lingers a few polls after it, for `ready` to see whether it compiled)."""
     monkeypatch.setattr(numba_cache, "NOTICE_AFTER_SECONDS", 0.0)
@@ -204,7 +204,7 @@ def waited_for(dispatcher, monkeypatch) -> list[str]:
         notices.append(text)
         release.set()
 
-    assert numba_cache.ready(dispatcher, prepare, notice=notice)
+    assert numba_cache.ready(dispatcher, prepare, notice=notice, kernel=name)
     return notices
 
 
@@ -221,6 +221,15 @@ def test_ready_says_it_compiles_for_as_long_as_the_last_compile_here_took(monkey
     assert numba_cache.compile_seconds() == measured
     (tmp_path / numba_cache.COMPILE_SECONDS_FILE).write_text("123.4\n")
     assert numba_cache.compiling_message() == "Compiling the kernel (about 123 s on this machine)…"
+
+
+def test_the_gpu_kernel_has_notices_and_a_compile_time_of_its_own(monkeypatch, tmp_path):
+    """The CUDA backend's kernel is named in the notices, and its compile's time is kept apart from the CPU
+    kernel's."""
+    assert waited_for(kernel(tmp_path, monkeypatch), monkeypatch, "GPU kernel")[-1] == (
+        "Compiling the GPU kernel (the first time on this machine)…")
+    assert numba_cache.compile_seconds("GPU kernel") is not None and numba_cache.compile_seconds() is None
+    assert waited_for(kernel(tmp_path, monkeypatch), monkeypatch, "GPU kernel") == ["Loading the GPU kernel…"]
 
 
 def test_ready_returns_at_a_cancel_while_the_kernel_compiles(monkeypatch, tmp_path):
