@@ -2,7 +2,7 @@
 functions compile to PTX (for compute capability 9.0, no GPU needed) and in how many seconds, and the PTX's
 size; then the batch kernels of tests/support/cuda_kernels.py as whole kernels, assembled by ptxas (nvJitLink)
 for their registers, stack, spills and constant bytes. Figures in docs/architecture.md
-("GPU backend (in progress)").
+("GPU backend").
 
     python -m bench.cuda_compile
 """

@@ -11,6 +11,12 @@ argument types every unit passes (`kernels/numba_cache.py` does it in a helper t
 telling `notice` "Loading the kernel…" or "Compiling the kernel (about N s here)…"). Compiling without
 running leaves nothing running in the background after a cancel (Numba's workqueue threading layer aborts
 when two threads launch kernels at once). The NumPy backend has nothing to prepare.
+
+The CUDA row (`kernels/cuda_backend.py`) refuses a scene with more media than its threads hold, then one where
+no GPU is usable (`cuda_target.require_device`: a SpectralError naming the missing package, driver or GPU),
+then copies the kernel scene to the device and loads or compiles the GPU kernel for it as the Numba row does
+("Loading the GPU kernel…", "Compiling the GPU kernel…"). Its data passes' first hits run on the CPU, with the
+Numba row's first-hit kernel.
 """
 
 from collections.abc import Callable
@@ -21,7 +27,7 @@ import numpy as np
 
 from . import background_compile
 from .errors import SpectralError
-from .kernels.layout import KernelScene
+from .kernels.layout import MAX_MEDIA, KernelScene
 from .passes import first_hit_ready
 
 
@@ -82,6 +88,35 @@ def _prepare_numba(kernel_scene: KernelScene, seed: int, cancel=None, notice=Non
     return numba_cache.ready(kernel, lambda: kernel.compile(signature), cancel, notice)
 
 
+def check_cuda_media(count: int, where: str = "the scene") -> None:
+    """A SpectralError when a scene has more media than a CUDA thread's path state holds (`layout.MAX_MEDIA`)."""
+    if count > MAX_MEDIA:
+        raise SpectralError(f"{where}: {count} media, and the cuda backend renders at most {MAX_MEDIA} (the numba "
+                            f"backend renders any number)")
+
+
+def _cuda_kernels() -> ModuleType:
+    from .kernels import cuda_backend
+
+    return cuda_backend
+
+
+def _prepare_cuda(kernel_scene: KernelScene, seed: int, cancel=None, notice=None) -> bool:
+    """Check the scene's media and the device, then load or compile the GPU kernel for the argument types of the
+    scene's units, cancellably (module docstring)."""
+    import numba
+
+    from .kernels import cuda_target, numba_cache
+
+    cuda_backend = _cuda_kernels()
+    check_cuda_media(kernel_scene.media.density_scale.shape[0])
+    cuda_target.require_device()
+    kernel = cuda_backend.kernel()
+    arguments = cuda_backend.device_arguments(tile_arguments(kernel_scene, 0, (0, 1), (0, 0, 1, 1), seed))
+    signature = tuple(numba.typeof(argument) for argument in arguments)
+    return numba_cache.ready(kernel, lambda: kernel.compile(signature), cancel, notice, cuda_backend.KERNEL)
+
+
 def _ready(*_arguments) -> bool:
     """Nothing to prepare: the NumPy backend runs as it is."""
     return True
@@ -90,6 +125,7 @@ def _ready(*_arguments) -> bool:
 ROWS = (
     Backend("numba", _numba_kernels, _prepare_numba, first_hit_ready),  # the default: compiled, cached per machine
     Backend("numpy", _numpy_kernels, _ready, _ready),  # the oracle: no compiler
+    Backend("cuda", _cuda_kernels, _prepare_cuda, first_hit_ready),  # numba-cuda: a GPU, compiled, cached per machine
 )
 NAMES = tuple(backend.name for backend in ROWS)  # the choices of a scene's `render.backend`
 

@@ -173,8 +173,9 @@ def render_passes(scene, kernel_scene: KernelScene, spp: int, seed: int, backend
 
 
 def first_hit_function(backend: str):
-    """The first-hit kernel of a backend: the Numba kernel, or the NumPy backend's oracle."""
-    if backend == "numba":
+    """The first-hit kernel of a backend: the Numba kernel (the CUDA backend's too: the data passes' first hits
+    run on the CPU), or the NumPy backend's oracle."""
+    if backend in ("numba", "cuda"):
         from .kernels.first_hit import first_hits
     else:
         from .kernels.numpy_backend import first_hits

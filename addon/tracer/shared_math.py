@@ -2,11 +2,15 @@
 and that Numba kernels compile in place (`numba.extending.register_jitable`).
 
 `shared` compiles a function of its own, which LLVM inlines into its caller or calls. `shared_inline` has
-Numba inline the function's code into each caller before typing, as the kernel's `jit(inline="always")`
-helpers are: for the trilinear look-up of the innermost loop, the lights and the DDA, which LLVM would call.
-Numba's InlineInlinables pass inlines any global with `targetoptions` {"inline": "always"} and a `py_func`
-(what a dispatcher has), so the plain function gets both; it stays registered as jitable for any call
-the pass does not reach.
+Numba inline the function's code into each caller before typing on the CPU: for the trilinear look-up of the
+innermost loop, the lights, the DDA and the path kernel's stages, which LLVM would call. Numba's
+InlineInlinables pass inlines any global with `targetoptions` {"inline": ...} and a `py_func` (what a
+dispatcher has), so the plain function gets both; it stays registered as jitable for any call the pass does not
+reach. On CUDA a `shared_inline` function is not inlined before typing (its cost model says no while numba-cuda
+compiles): it is a device function, typed once per signature and called, which NVVM inlines anyway. Typing the
+path kernel with every stage inlined took 294 s here, with device functions 24 s, for the same registers, stack
+and spills (bench/cuda_path_kernel.py). `shared_inline_always` inlines on every target: for the path state's
+constructors, whose CUDA local arrays must live in the kernel's frame.
 
 The elementwise math the shared functions call goes through the shims below (`floor`, `sqrt`, `exp`, `log1p`,
 `cbrt`, `copysign`, `absolute`): the NumPy ufunc itself in Python (the NumPy backend's arrays) and the same
@@ -18,8 +22,15 @@ lowering of these ufuncs, so `kernels/cuda_target.py` gives each a libdevice one
 may be infinite or NaN, an integer result): NumPy's `where` on arrays, a plain conditional on a Numba
 kernel's scalars (where `np.where` would make a 0-d array).
 
+A path's state and its sums go through three more shims, each plain NumPy here and in the CPU kernel:
+`local_empty` and `local_zeros` (a path's buffers: the thread's local arrays on CUDA, of literal shapes) and
+`accumulate` (`array[index] += value`: an atomic add on CUDA, where the threads of a pixel's samples add to
+the same sums).
+
 Without Numba installed the decorators change nothing, so the NumPy backend needs no compiler.
 """
+
+import threading
 
 import numpy as np
 
@@ -42,6 +53,26 @@ SHIMS = floor, sqrt, exp, log1p, cbrt, copysign, absolute = tuple(
     _shim(ufunc) for ufunc in (np.floor, np.sqrt, np.exp, np.log1p, np.cbrt, np.copysign, np.absolute))
 
 
+def local_empty(shape, dtype):
+    """`np.empty(shape, dtype)`: a path's buffer (a local array of the thread on CUDA, `cuda_target`)."""
+    return np.empty(shape, dtype)
+
+
+def local_zeros(shape, dtype):
+    """`np.zeros(shape, dtype)`: a path's buffer (a local array of the thread on CUDA, zeroed, `cuda_target`)."""
+    return np.zeros(shape, dtype)
+
+
+_ADDING = threading.Lock()
+
+
+def accumulate(array, index, value):
+    """`array[index] += value`: a plain add in the CPU kernel, an atomic one on CUDA (`cuda_target`). In Python
+    (numba-cuda's simulator, whose GPU threads are Python's) under a lock."""
+    with _ADDING:
+        array[index] += value
+
+
 def select(condition, if_true, if_false):
     """`if_true` where `condition` holds, else `if_false` (both are evaluated)."""
     return np.where(condition, if_true, if_false)
@@ -55,7 +86,7 @@ except ImportError:  # the NumPy backend works without Numba
     def shared(function):
         return function
 
-    shared_inline = shared
+    shared_inline = shared_inline_always = shared
 else:
 
     @overload(select)
@@ -75,8 +106,33 @@ else:
     for _each in SHIMS:
         _cpu_shim(_each)
 
-    def shared_inline(function):
+    # Compiled as small functions of their own, which LLVM inlines: never `inline="always"` on the CPU. Numba's
+    # typed inlining of an overload into the path kernel corrupted the kernel (zero radiance, then a crash or an
+    # endless loop on more pixels), even where the inlined call never ran; the same calls compiled as functions
+    # give the kernel's sums bit for bit (docs/architecture.md, "GPU backend").
+    overload(local_empty, target="cpu")(lambda shape, dtype: lambda shape, dtype: np.empty(shape, dtype))
+    overload(local_zeros, target="cpu")(lambda shape, dtype: lambda shape, dtype: np.zeros(shape, dtype))
+
+    @overload(accumulate, target="cpu")
+    def _accumulate_on_cpu(array, index, value):
+        def add(array, index, value):
+            array[index] += value
+        return add
+
+    from numba.core.target_extension import current_target
+
+    def _on_the_cpu(call, caller_ir, callee_ir):
+        """`shared_inline`'s cost model: inline on the CPU, not while numba-cuda compiles (its target is "cuda")."""
+        return current_target() != "cuda"
+
+    def _marked(function, inline):
         shared(function)
-        function.targetoptions = {"inline": "always"}
+        function.targetoptions = {"inline": inline}
         function.py_func = function
         return function
+
+    def shared_inline(function):
+        return _marked(function, _on_the_cpu)
+
+    def shared_inline_always(function):
+        return _marked(function, "always")

@@ -43,6 +43,8 @@ def validate(scene: Scene) -> Scene:
     _check_camera(scene.camera, "camera")
     for index, medium in enumerate(scene.media):
         _check_medium(medium, f"media[{index}]")
+    if scene.settings.backend == "cuda":
+        backends.check_cuda_media(len(scene.media), "media")
     for index, light in enumerate(scene.lights):
         _check_light(light, f"lights[{index}]", scene.settings.cmf)
     for index, surface in enumerate(scene.surfaces):

@@ -21,9 +21,11 @@ MODULES = (lookups, geometry, media, light_sampling, envmap, surfaces, dda, rng,
 
 
 def shared_in_sources():
-    """(module, name) of every function the tracer's sources decorate `@shared` or `@shared_inline`."""
+    """(module, name) of every function the tracer's sources decorate `@shared` or `@shared_inline`, but the Numba
+    kernel's path functions (`kernels/numba_backend.py`), which compile for CUDA as one kernel, the CUDA backend's
+    (tests/tracer/kernels/test_cuda_backend.py)."""
     found = set()
-    for path in sorted(TRACER.rglob("*.py")):
+    for path in sorted(set(TRACER.rglob("*.py")) - {TRACER / "kernels" / "numba_backend.py"}):
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.FunctionDef) and any(
                     isinstance(d, ast.Name) and d.id in ("shared", "shared_inline") for d in node.decorator_list):

@@ -1,6 +1,6 @@
 """The table of kernel backends (addon/tracer/backends.py): one row per name a scene may choose, each with its
 `prepare`, which a render asks before its first unit (the Numba kernel loaded or compiled, after any compile
-running in the background; nothing for NumPy), and a `False` from it stops the render before any unit."""
+running in the background; nothing for NumPy; the CUDA row's: tests/tracer/kernels/test_cuda_backend.py), and a `False` from it stops the render before any unit."""
 
 import dataclasses
 
@@ -21,12 +21,14 @@ def never(*_arguments):
 
 
 def test_each_name_has_one_row_and_the_scene_format_offers_exactly_those():
-    assert backends.NAMES == ("numba", "numpy")
+    assert backends.NAMES == ("numba", "numpy", "cuda")
     assert [backends.named(name).name for name in backends.NAMES] == list(backends.NAMES)
-    with pytest.raises(SpectralError, match="unknown backend 'cuda': choose one of numba, numpy"):
-        backends.named("cuda")
-    with pytest.raises(SpectralError, match=r"render.backend: unknown value .*cuda.* \(allowed: numba, numpy\)"):
-        check_settings(dataclasses.replace(RenderSettings(), backend="cuda"))
+    with pytest.raises(SpectralError, match="unknown backend 'vulkan': choose one of numba, numpy, cuda"):
+        backends.named("vulkan")
+    with pytest.raises(SpectralError, match=r"render.backend: unknown value .*vulkan.* \(allowed: numba, numpy, "
+                                            r"cuda\)"):
+        check_settings(dataclasses.replace(RenderSettings(), backend="vulkan"))
+    check_settings(dataclasses.replace(RenderSettings(), backend="cuda"))
 
 
 def test_the_numpy_backend_has_nothing_to_prepare(tiny_scene):

@@ -4,7 +4,7 @@ usable device and driver exist.
 
 Nothing here is imported with the tracer: numba-cuda is imported on the first call of `compiler()`, so the
 tracer and the extension (whose zip does not bundle numba-cuda) work where it is absent. The compiler is
-numba-cuda, not numba-cuda-mlir (docs/architecture.md, "GPU backend (in progress)", says why): a switch
+numba-cuda, not numba-cuda-mlir (docs/architecture.md, "GPU backend", says why): a switch
 changes `_import_compiler` and the module names of the two patches below.
 
 Two patches make numba-cuda 0.30 compile on a machine without a GPU and with NumPy 2.5, each applied only
@@ -53,11 +53,59 @@ def _import_compiler():
     return cuda
 
 
-def _register_shims():
-    """The CUDA target's code for every `shared_math` shim: its libdevice function, on scalars."""
+def _local_array(cuda, zeroed):
+    """The CUDA code of `shared_math.local_empty` (`zeroed` False) or `local_zeros`: a local array of the thread,
+    of the literal shape given, inlined into its caller (its storage is the kernel's frame). It is zeroed by
+    loops over its axes: a reshape calls Numba's runtime, which PTX lacks."""
+    from numba.core import types
+    from numba.core.errors import TypingError
+
+    def typer(shape, dtype):
+        kinds = shape.types if isinstance(shape, types.BaseTuple) else (shape,)
+        if not all(isinstance(kind, types.IntegerLiteral) for kind in kinds):
+            raise TypingError(f"a CUDA local array needs a literal shape, not {shape}")
+        dims = tuple(kind.literal_value for kind in kinds)
+        element = dtype.dtype
+        if len(dims) == 1:
+            def impl(shape, dtype):
+                array = cuda.local.array(dims, element)
+                if zeroed:
+                    for a in range(dims[0]):
+                        array[a] = 0
+                return array
+        elif len(dims) == 2:
+            def impl(shape, dtype):
+                array = cuda.local.array(dims, element)
+                if zeroed:
+                    for a in range(dims[0]):
+                        for b in range(dims[1]):
+                            array[a, b] = 0
+                return array
+        else:
+            def impl(shape, dtype):
+                array = cuda.local.array(dims, element)
+                if zeroed:
+                    for a in range(dims[0]):
+                        for b in range(dims[1]):
+                            for c in range(dims[2]):
+                                array[a, b, c] = 0
+                return array
+        return impl
+
+    return typer
+
+
+def _register_shims(cuda):
+    """The CUDA target's code for every `shared_math` shim: libdevice's function for the elementwise math (on
+    scalars), local arrays for a path's buffers, atomic adds for its sums."""
     from numba.core.types import Number
     from numba.cuda import libdevice
     from numba.cuda.extending import overload
+
+    overload(shared_math.local_empty, target="cuda", inline="always", prefer_literal=True)(_local_array(cuda, False))
+    overload(shared_math.local_zeros, target="cuda", inline="always", prefer_literal=True)(_local_array(cuda, True))
+    overload(shared_math.accumulate, target="cuda")(
+        lambda array, index, value: lambda array, index, value: cuda.atomic.add(array, index, value))
 
     def register(shim, device_function):
         if shim.ufunc.nin == 1:
@@ -80,8 +128,8 @@ def compiler():
         cuda = _import_compiler()
     except ImportError as error:
         raise SpectralError(f"{MISSING} ({error})") from error
-    if not importlib.import_module("numba.cuda.core.config").ENABLE_CUDASIM:  # the simulator runs NumPy's
-        _register_shims()
+    if not simulating():  # the simulator runs the shims' Python
+        _register_shims(cuda)
     if not cuda.is_available():  # no driver or no device (the simulator is always available)
         device = types.SimpleNamespace(compute_capability=COMPUTE_CAPABILITY)
         for name in ("numba.cuda.dispatcher", "numba.cuda.compiler"):
@@ -89,11 +137,17 @@ def compiler():
     return cuda
 
 
-def compile_ptx(function, argument_types, cc=COMPUTE_CAPABILITY, device=False):
+def simulating() -> bool:
+    """Whether numba-cuda is its simulator (NUMBA_ENABLE_CUDASIM=1 when it was first imported): kernels run as
+    Python, on NumPy's arrays."""
+    return bool(importlib.import_module("numba.cuda.core.config").ENABLE_CUDASIM)
+
+
+def compile_ptx(function, argument_types, cc=COMPUTE_CAPABILITY, device=False, opt=True):
     """PTX of `function` (plain Python, or a `shared_math.shared` function) for the Numba types
     `argument_types`, compiled for compute capability `cc` without a GPU: a device function when `device`, else
-    a kernel. Returns (PTX text, return type)."""
-    return compiler().compile_ptx(function, tuple(argument_types), device=device, cc=cc)
+    a kernel; NVVM optimises it unless `opt` is False. Returns (PTX text, return type)."""
+    return compiler().compile_ptx(function, tuple(argument_types), device=device, cc=cc, opt=opt)
 
 
 def assemble(ptx, cc=COMPUTE_CAPABILITY):

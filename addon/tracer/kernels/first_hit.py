@@ -20,7 +20,7 @@ import numpy as np
 from numba import prange
 
 from .geometry import camera_depths, camera_ray
-from .numba_backend import _closest_hit, _new_hit, jit
+from .numba_backend import _closest_hit, _new_hit, cpu_jit
 from .numba_cache import cached
 from .rng import low_discrepancy, pixel_key
 from .surfaces import facing_normal
@@ -30,7 +30,7 @@ FirstHitScene = namedtuple("FirstHitScene", "camera surfaces")
 
 
 @cached
-@jit(parallel=True, nogil=True)
+@cpu_jit(parallel=True, nogil=True)
 def first_hits(camera, surfaces, x0, y0, width, height, sample_begin, sample_end, seed, values, triangles):
     """Fill `values` and `triangles` (module docstring) for samples [sample_begin, sample_end) of each pixel of
     the tile (x0, y0, width, height), a row per thread. Each row puts the scene together itself: Numba's

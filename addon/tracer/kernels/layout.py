@@ -52,6 +52,12 @@ GREY_SPREAD = 1e-9
 SURFACE_OFFSET = 1e-9
 # The deepest a BVH gets (`bvh.build` falls back to median splits to stay within it), so traversal's stack.
 BVH_MAX_DEPTH = 96
+# The hierarchy walk's stack of nodes (`numba_backend._closest_hit`), a name: a CUDA local array's shape must be a
+# literal, not an expression.
+BVH_STACK = 2 * BVH_MAX_DEPTH
+# The media one CUDA thread's path state holds (`cuda_backend`; the CPU kernel holds any number): the backend
+# refuses a scene with more.
+MAX_MEDIA = 4
 # A camera ray's first hit, for the data passes (`first_hit`): depth, distance, normal x, y, z.
 FIRST_HIT_VALUES = 5
 

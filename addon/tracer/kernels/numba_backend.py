@@ -46,6 +46,12 @@ included, is inlined into it,
 and the kernel scene's arrays are borrowed (`_borrowed`): a call that takes the scene costs nothing, where Numba would
 otherwise update the reference count of each of its ~40 arrays (atomic operations that threads contend for) on every
 call. The arrays sit in the scene's nested groups (`layout.KernelScene`), all of which `_borrowed` borrows.
+
+Two targets: `_render_samples` and everything it calls are `shared_math`'s (`shared`, and `shared_inline` for what
+Numba inlines before typing on the CPU, where they are device functions on CUDA), so they compile for Numba's CPU
+target here and for CUDA in `cuda_backend`, which runs `_render_samples` for one sample per GPU thread. The state's buffers (`local_empty`, `local_zeros`) and the
+per-pixel sums of light passes and spectral bins (`accumulate`) go through `shared_math`'s per-target shims.
+`render_tile`, `_render_runs` and `_render_pixels` are the CPU's alone (`cpu_jit`).
 """
 
 import functools
@@ -54,7 +60,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit, prange, types
 from numba.core import cgutils
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 
 from ..binned import linear_over_binned, pdf_binned, sample_binned
 from ..phase import INV_FOUR_PI, hg_sample_cos, rayleigh_sample_cos, sample_direction
@@ -68,7 +74,7 @@ from .estimator import (
     roulette_survival, shadow_bound, shadow_roulette)
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
-    BVH_MAX_DEPTH,
+    BVH_STACK,
     LIGHT_AREA,
     MAX_WAVELENGTHS_PER_PATH,
     PHASE_RAYLEIGH,
@@ -104,6 +110,7 @@ from .media import (
     temperature,
     thermal_emission,
 )
+from ..shared_math import accumulate, local_empty, local_zeros, shared, shared_inline, shared_inline_always
 from .numba_cache import cached
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 from .spectrum_bins import spectrum_bin, spectrum_weight
@@ -113,8 +120,9 @@ from .transparency import transparency_weight
 
 # Every kernel function divides as NumPy does (x/0 gives inf or nan, like the NumPy backend) instead of
 # Python's model, which checks every divisor for zero to raise ZeroDivisionError: the images are
-# identical and the kernel is 1.3–1.4× faster (bench/README.md).
-jit = functools.partial(njit, error_model="numpy")
+# identical and the kernel is 1.3–1.4× faster (bench/README.md). The shared functions the CPU-only ones call
+# inherit their error model (Numba's flag inheritance); numba-cuda's kernels divide as NumPy does anyway.
+cpu_jit = functools.partial(njit, error_model="numpy")
 
 MAX_LAMBDAS = MAX_WAVELENGTHS_PER_PATH
 INF = np.inf
@@ -127,12 +135,23 @@ SPEC_ROWS = 7
 
 # ----------------------------------------------------------------------------- small helpers
 
-@intrinsic
-def _borrowed(typingctx, scene):
+def _borrowed(scene):
     """The kernel scene (or a tuple of buffers) with its arrays borrowed, at any depth of nested tuples: the
-    same data, without the reference counts that Numba updates whenever an array is passed to a function
-    or sliced. Those updates are atomic operations on counters that every thread shares; the caller keeps
-    the arrays alive for the whole render."""
+    same data, without the reference counts that Numba's CPU target updates whenever an array is passed to a
+    function or sliced. Those updates are atomic operations on counters that every thread shares; the caller
+    keeps the arrays alive for the whole render. In Python (numba-cuda's simulator) and on CUDA
+    (`cuda_backend`), whose arrays carry no reference counts, the scene itself."""
+    return scene
+
+
+@overload(_borrowed, target="cpu")  # a function of its own, as `shared_math`'s CPU overloads are (they say why)
+def _borrowed_on_cpu(scene):
+    return lambda scene: _borrow_arrays(scene)
+
+
+@intrinsic(target="cpu")
+def _borrow_arrays(typingctx, scene):
+    """`_borrowed`'s CPU code."""
 
     def codegen(context, builder, signature, args):
         return _borrow(context, builder, signature.args[0], args[0])
@@ -159,7 +178,7 @@ def _borrow(context, builder, kind, value):
 
 
 
-@jit(inline="always")
+@shared_inline
 def _next(stream):
     """Next uniform number of the path's stream (stream = path key, counter, pixel key, sample; `rng`)."""
     counter = stream[1]
@@ -171,7 +190,7 @@ def _next(stream):
     return value
 
 
-@jit(inline="always")
+@shared_inline
 def _mean(values, n):
     total = 0.0
     for i in range(n):
@@ -181,7 +200,7 @@ def _mean(values, n):
 
 # ----------------------------------------------------------------------------- volume look-ups
 
-@jit(inline="always")
+@shared_inline
 def _fill_spectral_cache(ks, lams, n, spec):
     """Tabulated spectra of every medium at the path's current wavelengths (looked up once per path
     and after a fluorescent wavelength change, instead of at every collision)."""
@@ -197,7 +216,7 @@ def _fill_spectral_cache(ks, lams, n, spec):
             spec[m, SPEC_GLOW_BLACKBODY, i] = table_at(ks.glow.blackbody, m, at)
 
 
-@jit(inline="always")
+@shared_inline
 def _coefficients(ks, px, py, pz, lams, spec, n, c):
     """Medium coefficients at a point for each path wavelength (summed over media), per-medium
     scattering / fluorescence coefficients (for choosing which medium scatters), and emission, into the
@@ -250,7 +269,7 @@ T_ENTRY, T_EXIT, T_NEXT, T_DELTA, ORIGIN, DIRECTION, CONTROL, DEPTH, EXCESS, TRA
 STALE = -1.0  # the end of a ray's segment that `_tentative_collision` has yet to look up
 
 
-@jit(inline="always")
+@shared_inline
 def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, tracker):
     """Start every medium's DDA for the ray o + t·d, t in [t_min, t_max]."""
     state_i, state_f = tracker.state_i, tracker.state_f
@@ -269,7 +288,7 @@ def _tracker_start(ks, ox, oy, oz, dx, dy, dz, t_min, t_max, tracker):
         state_f[m, DIRECTION], state_f[m, DIRECTION + 1], state_f[m, DIRECTION + 2] = ldx, ldy, ldz
 
 
-@jit(inline="always")
+@shared_inline
 def _tracker_enter(ks, m, tracker):
     state_i, state_f = tracker.state_i, tracker.state_f
     for axis in range(3):
@@ -280,7 +299,7 @@ def _tracker_enter(ks, m, tracker):
     state_i[m, PHASE] = INSIDE
 
 
-@jit(inline="always")
+@shared_inline
 def _tracker_boundary(tracker, m):
     """The ray parameter where medium m's current majorant changes next."""
     state_f = tracker.state_f
@@ -292,7 +311,7 @@ def _tracker_boundary(tracker, m):
     return INF
 
 
-@jit(inline="always")
+@shared_inline
 def _block(ks, tracker, m):
     """Where medium m's current block is in `majorant.data` (and `majorant.minorant`)."""
     state_i = tracker.state_i
@@ -301,7 +320,7 @@ def _block(ks, tracker, m):
     return ks.majorant.offset[m] + index
 
 
-@jit(inline="always")
+@shared_inline
 def _tracker_segment(ks, tracker, controls):
     """(end of the current segment, the combined majorant σ̄ on it, the controls' share of σ̄). With
     `controls`, each medium's control σ_c (its block's minorant, scaled density; 0 outside its blocks) goes
@@ -324,14 +343,14 @@ def _tracker_segment(ks, tracker, controls):
     return t_end, sigma_bar, control_rate
 
 
-@jit(inline="always")
+@shared_inline
 def _integrate_controls(ks, tracker, dt):
     """Each medium's control integrated over dt more of the ray (its DEPTH slot)."""
     for m in range(ks.media.density_scale.shape[0]):
         tracker.state_f[m, DEPTH] += tracker.state_f[m, CONTROL] * dt
 
 
-@jit(inline="always")
+@shared_inline
 def _tracker_advance(ks, tracker, t_end):
     """Move every medium whose boundary is at `t_end` into its next block (or out)."""
     state_i, state_f = tracker.state_i, tracker.state_f
@@ -356,7 +375,7 @@ def _tracker_advance(ks, tracker, t_end):
             state_i[m, PHASE] = DONE
 
 
-@jit(inline="always")
+@shared_inline
 def _tentative_collision(ks, stream, tracker, t, t_end, rate, controls, residual):
     """The one tracking loop, of free flights (`_free_flight`) and shadow rays (`_transmittance`): from ray
     parameter t on the current segment (ending at t_end, tentative collisions drawn at `rate` on it; t_end
@@ -385,7 +404,7 @@ def _tentative_collision(ks, stream, tracker, t, t_end, rate, controls, residual
 
 # ----------------------------------------------------------------------------- phase functions
 
-@jit(inline="always")
+@shared_inline
 def _mixture_phase(ks, medium_s, spec, n, cos_theta, out):
     """Phase pdf (= value) at each wavelength: the σ_s-weighted mixture of the media's phases."""
     for i in range(n):
@@ -398,22 +417,24 @@ def _mixture_phase(ks, medium_s, spec, n, cos_theta, out):
         out[i] = weighted / total if total > 0.0 else 0.0
 
 
-@jit(inline="always")
-def _pick_medium(weights, i, u):
+@shared_inline
+def _pick_medium(ks, weights, i, u):
+    """A medium drawn in proportion to its `weights[m, i]` (rows beyond the scene's media are not looked at)."""
+    media = ks.media.density_scale.shape[0]
     total = 0.0
-    for m in range(weights.shape[0]):
+    for m in range(media):
         total += weights[m, i]
     target = u * total
-    for m in range(weights.shape[0]):
+    for m in range(media):
         target -= weights[m, i]
         if target < 0.0:
             return m
-    return weights.shape[0] - 1
+    return media - 1
 
 
 # ----------------------------------------------------------------------------- lights
 
-@jit(inline="always")
+@shared_inline
 def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
     """`light_sampling.sample_light` from (px, py, pz): direction, solid-angle pdf, distance and whether the
     light is a delta light; fills `radiance` with the radiance arriving at each wavelength."""
@@ -423,7 +444,7 @@ def _sample_light(ks, light, px, py, pz, u1, u2, lams, n, radiance):
     return wx, wy, wz, direction_pdf, distance, is_delta(ks, light)
 
 
-@jit(inline="always")
+@shared_inline
 def _next_area_light(ks, ox, oy, oz, dx, dy, dz, after, after_light, t_max):
     """The next area light face that the ray o + t d meets after (after, after_light) (its t, then its
     index, in that order) and before t_max: (t, light), or (INF, -1) where none is."""
@@ -437,7 +458,7 @@ def _next_area_light(ks, ox, oy, oz, dx, dy, dz, after, after_light, t_max):
     return best_t, best
 
 
-@jit(inline="always")
+@shared_inline
 def _area_light_seen(ks, chosen, ox, oy, oz, dx, dy, dz, distance, scattered, n, path, light):
     """Radiance of the area light `chosen` whose emitting face a ray from the vertex o along d reaches at
     `distance` (`_free_flight`, with the path's weights there), added by `_add_hit_light` (its light pdf: the
@@ -457,7 +478,7 @@ def _area_light_seen(ks, chosen, ox, oy, oz, dx, dy, dz, distance, scattered, n,
 
 # ----------------------------------------------------------------------------- surfaces
 
-@jit(inline="always")
+@shared_inline
 def _box_entry(ks, node, ox, oy, oz, ix, iy, iz, t_max):
     """Where the ray o + t d (with inverse direction i) enters the box of node `node` within [0, t_max], or
     INF where it misses it there."""
@@ -471,13 +492,13 @@ def _box_entry(ks, node, ox, oy, oz, ix, iy, iz, t_max):
     return near if near <= far else INF
 
 
-@jit(inline="always")
+@shared_inline
 def _inverse(d):
     """1/d, a huge number of the same sign for d = 0 (a slab the ray runs along is all or nothing)."""
     return 1.0 / d if d != 0.0 else 1e300
 
 
-@jit(inline="always")
+@shared_inline
 def _closest_hit(ks, ox, oy, oz, dx, dy, dz, t_max, any_hit, camera, hit):
     """The nearest triangle along the ray o + t d with 0 < t < t_max, walking the hierarchy nearer child
     first: (t, triangle), or (t_max, -1) where none is. With `any_hit`, the first triangle found (a shadow
@@ -517,7 +538,7 @@ def _closest_hit(ks, ox, oy, oz, dx, dy, dz, t_max, any_hit, camera, hit):
     return best_t, best
 
 
-@jit(inline="always")
+@shared_inline
 def _shadow_blocked(ks, ox, oy, oz, wx, wy, wz, distance, hit):
     """Whether a surface lies on the shadow ray from o along w before `distance` (stopping SURFACE_OFFSET short
     of its end, which may lie on an emissive surface)."""
@@ -531,7 +552,7 @@ def _shadow_blocked(ks, ox, oy, oz, wx, wy, wz, distance, hit):
     return triangle >= 0
 
 
-@jit(inline="always")
+@shared_inline
 def _surface_emission(ks, triangle, distance, dx, dy, dz, scattered, survival, n, path, light):
     """Radiance of an emissive surface that a path hits at `distance` along d, added by `_add_hit_light` (its
     light pdf: the mesh light's choice times its point's pdf in solid angle)."""
@@ -549,7 +570,7 @@ def _surface_emission(ks, triangle, distance, dx, dy, dz, scattered, survival, n
     _add_hit_light(scattered, survival, light_pdf, n, path, light)
 
 
-@jit(inline="always")
+@shared_inline
 def _add_hit_light(scattered, survival, light_pdf, n, path, light):
     """Add the radiance in `light.radiance` of a light that the path's ray hit: plain for a camera ray; after a
     scattering vertex, MIS-weighted against light sampling of pdf `light_pdf` (the light's choice included),
@@ -563,7 +584,7 @@ def _add_hit_light(scattered, survival, light_pdf, n, path, light):
             path.radiance[i] += hit_light_contribution(path.beta[i], light.radiance[i], survival, scattered, mean_r)
 
 
-@jit(inline="always")
+@shared_inline
 def _arrive_at_surface(ks, triangle, px, py, pz, dx, dy, dz, n, path, hit):
     """A path reaching triangle `triangle` at p along d: the surface's normal on the path's side and its
     reflectance at the path's wavelengths (a textured surface's at p) into `hit`; returns the point leaving it on
@@ -586,7 +607,7 @@ def _arrive_at_surface(ks, triangle, px, py, pz, dx, dy, dz, n, path, hit):
     return ox, oy, oz, reflects
 
 
-@jit(inline="always")
+@shared_inline
 def _sample_lambert(n, path, hit):
     """Cosine-weighted sampling of the direction leaving a surface (the same pdf at every wavelength, so
     the throughput takes the reflectance): the new direction, or a zero vector where its pdf is zero."""
@@ -629,47 +650,58 @@ Fluorescent = namedtuple("Fluorescent", "total point share medium tau_at tau rad
 Hit = namedtuple("Hit", "nodes entries normal reflectance")
 
 
-@jit(inline="always")
+# Each `_new_*` makes one kind of state from `local_empty` / `local_zeros` (`shared_math`): NumPy's arrays in the
+# CPU kernel, the thread's local arrays on CUDA, whose shapes must be literal there: `media` is the number of the
+# scene's media on the CPU, `MAX_MEDIA` on CUDA (`cuda_backend`). Inlined on both targets (`shared_inline_always`):
+# on CUDA the arrays live in the kernel's frame.
+@shared_inline_always
 def _new_path(media):
-    return Path(np.zeros(4, dtype=np.uint64), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
-                np.empty((media, SPEC_ROWS, MAX_LAMBDAS)), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
-                np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.zeros(1), np.zeros((MARKS, MAX_LAMBDAS)),
-                np.zeros(2, dtype=np.int64))
+    f = np.float64
+    return Path(local_zeros(4, np.uint64), local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f),
+                local_empty(MAX_LAMBDAS, f), local_empty((media, SPEC_ROWS, MAX_LAMBDAS), f),
+                local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f),
+                local_empty(MAX_LAMBDAS, f), local_zeros(1, f), local_zeros((MARKS, MAX_LAMBDAS), f),
+                local_zeros(2, np.int64))
 
 
-@jit(inline="always")
+@shared_inline_always
 def _new_coefficients(media):
-    return Coefficients(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
-                        np.zeros((media, MAX_LAMBDAS)), np.zeros((media, MAX_LAMBDAS)), np.zeros(1))
+    f = np.float64
+    return Coefficients(local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f),
+                        local_zeros((media, MAX_LAMBDAS), f), local_zeros((media, MAX_LAMBDAS), f), local_zeros(1, f))
 
 
-@jit(inline="always")
+@shared_inline_always
 def _new_light_sample():
-    return LightSample(np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS), np.empty(MAX_LAMBDAS),
-                       np.empty(MAX_LAMBDAS))
+    f = np.float64
+    return LightSample(local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f),
+                       local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f))
 
 
-@jit(inline="always")
+@shared_inline_always
 def _new_fluorescent():
-    return Fluorescent(np.zeros(RESERVOIRS), np.zeros((RESERVOIRS, 3)), np.zeros((RESERVOIRS, MAX_LAMBDAS)),
-                       np.zeros((RESERVOIRS, 2), dtype=np.int64), np.zeros(RESERVOIRS), np.zeros(1),
-                       np.zeros(MAX_LAMBDAS), np.zeros(MAX_LAMBDAS))
+    f = np.float64
+    return Fluorescent(local_zeros(RESERVOIRS, f), local_zeros((RESERVOIRS, 3), f),
+                       local_zeros((RESERVOIRS, MAX_LAMBDAS), f), local_zeros((RESERVOIRS, 2), np.int64),
+                       local_zeros(RESERVOIRS, f), local_zeros(1, f), local_zeros(MAX_LAMBDAS, f),
+                       local_zeros(MAX_LAMBDAS, f))
 
 
-@jit(inline="always")
+@shared_inline_always
 def _new_hit():
-    return Hit(np.zeros(2 * BVH_MAX_DEPTH, dtype=np.int64), np.zeros(2 * BVH_MAX_DEPTH), np.zeros(3),
-               np.zeros(MAX_LAMBDAS))
+    f = np.float64
+    return Hit(local_zeros(BVH_STACK, np.int64), local_zeros(BVH_STACK, f), local_zeros(3, f),
+               local_zeros(MAX_LAMBDAS, f))
 
 
-@jit(inline="always")
+@shared_inline_always
 def _new_tracker(media):
-    return Tracker(np.zeros((media, TRACKER_INTS), dtype=np.int64), np.zeros((media, TRACKER_FLOATS)))
+    return Tracker(local_zeros((media, TRACKER_INTS), np.int64), local_zeros((media, TRACKER_FLOATS), np.float64))
 
 
 # ----------------------------------------------------------------------------- camera and film
 
-@jit(inline="always")
+@shared_inline
 def _sample_wavelengths(ks, n, path):
     """The path's wavelengths: a hero drawn from the band's distribution and companions at u + i/n
     (stratified inverse CDF), with fresh weights."""
@@ -686,7 +718,7 @@ def _sample_wavelengths(ks, n, path):
     _fill_spectral_cache(ks, path.lams, n, path.spec)
 
 
-@jit(inline="always")
+@shared_inline
 def _see_through(ks, n, path):
     """A camera path reaching the background with Film ▸ Transparent on, or a holdout surface: its throughput
     (each wavelength's, as its radiance would have been weighted) into its transparency, as `transparency`
@@ -700,13 +732,13 @@ def _see_through(ks, n, path):
                                                                                n)
 
 
-@jit(inline="always")
+@shared_inline
 def _path_xyz(ks, n, path):
     """The path's XYZ estimate: each camera wavelength's radiance over its pdf, through the XYZ weights."""
     return _spectrum_xyz(ks, n, path, -1)
 
 
-@jit(inline="always")
+@shared_inline
 def _spectrum_xyz(ks, n, path, mark):
     """XYZ of the path's radiance (`mark` −1) or of one of its marks (`light_split`), as `_path_xyz` weighs it."""
     x, y, z = 0.0, 0.0, 0.0
@@ -722,7 +754,7 @@ def _spectrum_xyz(ks, n, path, mark):
     return x, y, z
 
 
-@jit(inline="always")
+@shared_inline
 def _path_spectrum(ks, n, path, sum_spectrum, row, column):
     """The path's spectral estimate added to its pixel's bins (`spectrum_bins`); nothing without bins."""
     if sum_spectrum.shape[2] == 0:
@@ -733,10 +765,10 @@ def _path_spectrum(ks, n, path, sum_spectrum, row, column):
             continue
         b = int(spectrum_bin(edges, path.lam_cam[i]))
         if b >= 0:
-            sum_spectrum[row, column, b] += spectrum_weight(edges, path.radiance[i], path.pdf_cam[i], n)
+            accumulate(sum_spectrum, (row, column, b), spectrum_weight(edges, path.radiance[i], path.pdf_cam[i], n))
 
 
-@jit(inline="always")
+@shared_inline
 def _mark(n, path, index):
     """Take the camera path's mark `index` of its radiance (`light_split`): the next one it takes."""
     for i in range(n):
@@ -744,7 +776,7 @@ def _mark(n, path, index):
     path.first[1] = index + 1
 
 
-@jit(inline="always")
+@shared_inline
 def _mark_vertex(n, path, on_surface):
     """The camera path reaches a vertex: its first (what it is, and the mark), or its second (the mark)."""
     if path.first[1] == FIRST:
@@ -754,7 +786,7 @@ def _mark_vertex(n, path, on_surface):
         _mark(n, path, SECOND)
 
 
-@jit(inline="always")
+@shared_inline
 def _mark_fluorescence(path, i, depth, contribution):
     """A fluorescent sub-path from a collision at vertex `depth` adds `contribution` at camera wavelength i: as a
     medium's emission there, to the marks taken after it (`light_split`)."""
@@ -765,7 +797,7 @@ def _mark_fluorescence(path, i, depth, contribution):
         path.marks[SECOND, i] += contribution
 
 
-@jit(inline="always")
+@shared_inline
 def _split_light(ks, n, path, x, y, z, light_sums):
     """The camera path's XYZ (x, y, z) clamped (Light Paths ▸ Clamping, `light_split`), and split by its marks into
     the light categories, added to `light_sums` (slots × XYZ; none: no light passes). Returns the clamped XYZ."""
@@ -782,27 +814,27 @@ def _split_light(ks, n, path, x, y, z, light_sums):
                       clamped_mark(z2, z1, direct, indirect))
         x0, y0, z0 = direct * x0, direct * y0, direct * z0
     if light_sums.shape[0] > 0:
-        light_sums[EMISSION, 0] += x0
-        light_sums[EMISSION, 1] += y0
-        light_sums[EMISSION, 2] += z0
+        accumulate(light_sums, (EMISSION, 0), x0)
+        accumulate(light_sums, (EMISSION, 1), y0)
+        accumulate(light_sums, (EMISSION, 2), z0)
         if path.first[0] == BACKGROUND:
-            light_sums[ENVIRONMENT, 0] += x - x0
-            light_sums[ENVIRONMENT, 1] += y - y0
-            light_sums[ENVIRONMENT, 2] += z - z0
+            accumulate(light_sums, (ENVIRONMENT, 0), x - x0)
+            accumulate(light_sums, (ENVIRONMENT, 1), y - y0)
+            accumulate(light_sums, (ENVIRONMENT, 2), z - z0)
         else:
             slot = direct_slot(path.first[0])
-            light_sums[slot, 0] += x2 - x0
-            light_sums[slot, 1] += y2 - y0
-            light_sums[slot, 2] += z2 - z0
-            light_sums[slot + 1, 0] += x - x2
-            light_sums[slot + 1, 1] += y - y2
-            light_sums[slot + 1, 2] += z - z2
+            accumulate(light_sums, (slot, 0), x2 - x0)
+            accumulate(light_sums, (slot, 1), y2 - y0)
+            accumulate(light_sums, (slot, 2), z2 - z0)
+            accumulate(light_sums, (slot + 1, 0), x - x2)
+            accumulate(light_sums, (slot + 1, 1), y - y2)
+            accumulate(light_sums, (slot + 1, 2), z - z2)
     return x, y, z
 
 
 # ----------------------------------------------------------------------------- transport
 
-@jit(inline="always")
+@shared_inline
 def _control_depth(ks, tracker, spec, i):
     """The control's optical depth so far along a shadow ray at wavelength i (residual ratio tracking)."""
     depth = 0.0
@@ -811,7 +843,7 @@ def _control_depth(ks, tracker, spec, i):
     return depth
 
 
-@jit(inline="always")
+@shared_inline
 def _is_grey(ks, n, spec):
     """Whether the path may weigh light sampling against phase sampling with residual ratio tracking: a
     light is not a delta light, and the path is grey (every medium attenuates its wavelengths alike, to
@@ -837,7 +869,7 @@ def _is_grey(ks, n, spec):
     return True
 
 
-@jit(inline="always")
+@shared_inline
 def _faint_shadow_survives(ks, n, path, light, tracker, residual):
     """Russian roulette on a faint shadow ray (every transmittance below SHADOW_ROULETTE_BELOW; with
     `residual`, the ratio-tracked factors times the control's transmittance at its least optical depth):
@@ -864,7 +896,7 @@ def _faint_shadow_survives(ks, n, path, light, tracker, residual):
     return going_on
 
 
-@jit(inline="always")
+@shared_inline
 def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, tracker):
     """Ratio tracking along a shadow ray: fills `light.transmittance` (per λ) and `light.survival`, the
     chance MIS gives the unidirectional strategy of passing where the shadow ray passed (per λ).
@@ -907,7 +939,7 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
                                                              _control_depth(ks, tracker, path.spec, i))
 
 
-@jit(inline="always")
+@shared_inline
 def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, on_surface, grey, n, path, vertex, light, tracker, hit):
     """Next-event estimation from a scattering vertex in a medium or on a surface (`on_surface`: the BRDF
     ρ/π, `hit`): one light chosen by its pmf, a shadow ray that a surface stops, ratio-tracked transmittance
@@ -946,7 +978,7 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, on_surface, grey, n, path
                                                         light.radiance[i], mean_r)
 
 
-@jit(inline="always")
+@shared_inline
 def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, vertex, fl):
     """Offer each medium's fluorescent source at a tentative collision to the reservoirs `fl`: its weight
     Σ_i β_i σ_fl,i / (σ̄ · mean r_u) (the collision estimator of a source, as for thermal emission), times
@@ -977,7 +1009,7 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
         fl.tau[0] = tau + vertex.dye[0] / sigma_bar
 
 
-@jit(inline="always")
+@shared_inline
 def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, n, path, vertex, tracker, fl,
                  light):
     """Delta tracking to the next real event before t_max (a surface; EVENT_ESCAPE there), collecting emission
@@ -1035,7 +1067,7 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, 
             return EVENT_ABSORB, qx, qy, qz, sigma_bar
 
 
-@jit(inline="always")
+@shared_inline
 def _escape(ks, dx, dy, dz, scattered, survival, n, path, light):
     """Radiance of the infinite lights seen along the escaping ray, each added by `_add_hit_light`; a camera
     ray sees through them with Film ▸ Transparent on (`_see_through`)."""
@@ -1049,7 +1081,7 @@ def _escape(ks, dx, dy, dz, scattered, survival, n, path, light):
         _add_hit_light(scattered, survival, light_pdf, n, path, light)
 
 
-@jit(inline="always")
+@shared_inline
 def _chosen_source(path, fl):
     """After a transport: the reservoir whose collision starts the next fluorescent sub-path and that
     collision's weight w / p (`fluorescent_reservoir.mixture_weight`), or (0, 0.0) when nothing was offered."""
@@ -1059,7 +1091,7 @@ def _chosen_source(path, fl):
     return k, mixture_weight(fl.tau_at[k], fl.total[0], fl.total[1], fl.total[2])
 
 
-@jit(inline="always")
+@shared_inline
 def _start_fluorescent_branch(ks, path, fl, k):
     """A one-wavelength sub-path at reservoir k's collision: λ_in drawn ∝ the excitation of the medium
     that fluoresces (binned, then weighted to the interpolated spectrum), fresh weights, and empty
@@ -1075,7 +1107,7 @@ def _start_fluorescent_branch(ks, path, fl, k):
         fl.total[j] = 0.0
 
 
-@jit(inline="always")
+@shared_inline
 def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
     """Phase sampling of the next direction (the hero's phase; MIS pdfs at every wavelength): the new
     direction, or a zero vector when the hero's pdf is zero (the path ends)."""
@@ -1084,7 +1116,7 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
     if isotropic:
         new_cos = 1.0 - 2.0 * u1
     else:
-        medium = _pick_medium(vertex.medium_s, 0, _next(path.stream))
+        medium = _pick_medium(ks, vertex.medium_s, 0, _next(path.stream))
         if ks.media.phase_kind[medium] == PHASE_RAYLEIGH:
             new_cos = rayleigh_sample_cos(u1)
         else:
@@ -1103,7 +1135,7 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
     return normalize(nx, ny, nz)
 
 
-@jit(inline="always")
+@shared_inline
 def _survives_roulette(ks, depth, n, path):
     """Russian roulette on the MIS-weighted throughput from `rr_depth` on; survivors are reweighted."""
     if depth < ks.termination.rr_depth:
@@ -1122,7 +1154,7 @@ def _survives_roulette(ks, depth, n, path):
     return True
 
 
-@jit(inline="always")
+@shared_inline
 def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, vertex, light, tracker, fl, hit):
     """Transport from a camera ray, or (`emitted`) from an isotropic fluorescent emission at (ox, oy, oz)
     at vertex `depth`: collects the radiance per wavelength in `path.radiance` and offers fluorescent
@@ -1187,7 +1219,7 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, ver
         at_vertex = True
 
 
-@jit(inline="always")
+@shared_inline
 def _trace(ks, ox, oy, oz, dx, dy, dz, splitting, n, path, vertex, light, tracker, fl, hit):
     """Transport of one path from a camera ray, then of its fluorescent sub-paths one after another, all
     through the one `_transport` below (inlined once, not once per kind of path): collects the path's
@@ -1223,7 +1255,7 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, splitting, n, path, vertex, light, tracke
         path.radiance[i] = fl.radiance[i]
 
 
-@jit
+@cpu_jit
 def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
                    sum_transparent, sum_light_passes, sum_spectrum):
     """Samples [sample_begin, sample_end) of the tile's pixels [first, last) (row-major), added to `sum_xyz`,
@@ -1247,7 +1279,7 @@ def _render_pixels(ks, x0, y0, tile_width, first, last, sample_begin, sample_end
         sum_transparent[row, column] += st
 
 
-@jit
+@shared
 def _render_samples(ks, px, py, pixel, sample_begin, sample_end, seed, band, path, vertex, light, tracker, fl, hit,
                     light_sums, sum_spectrum, row, column):
     """Samples [sample_begin, sample_end) of one pixel, (Σ X, Σ Y, Σ Z, Σ X², Σ Y², Σ Z², Σ transparency), in the
@@ -1287,7 +1319,7 @@ PIXEL_CHUNKS = 64
 
 
 @cached
-@jit(nogil=True)
+@cpu_jit(nogil=True)
 def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band, sum_xyz, sum_sq,
                 sum_transparent, sum_light_passes, sum_spectrum):
     """Add samples [sample_begin, sample_end) of every pixel of a tile to the accumulators
@@ -1301,7 +1333,7 @@ def render_tile(ks, x0, y0, tile_width, tile_height, sample_begin, sample_end, s
                  sample_end, seed, band, sum_xyz, sum_sq, sum_transparent, sum_light_passes, sum_spectrum)
 
 
-@jit(parallel=True, nogil=True)
+@cpu_jit(parallel=True, nogil=True)
 def _render_runs(camera, density, majorant, temperature, glow, media, fluorescence, lights, envmaps, surfaces,
                  wavelengths, termination, x0, y0, tile_width, tile_height, sample_begin, sample_end, seed, band,
                  sum_xyz, sum_sq, sum_transparent, sum_light_passes, sum_spectrum):

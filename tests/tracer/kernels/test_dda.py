@@ -101,7 +101,7 @@ def backend_walks():
     from addon.tracer.kernels import numba_backend as nb
     from addon.tracer.kernels import numpy_backend as npb
 
-    @nb.jit  # the kernel's options (NumPy's error model: a ray parallel to a face divides by zero)
+    @nb.cpu_jit  # the kernel's options (NumPy's error model: a ray parallel to a face divides by zero)
     def numba_walk(ks, origin, direction, cells, leaves):
         tracker = nb._new_tracker(1)
         nb._tracker_start(ks, origin[0], origin[1], origin[2], direction[0], direction[1], direction[2], 0.0,
