@@ -6,15 +6,15 @@ after installing, it renders with the portable kernel the extension ships meanwh
 
 import bpy
 
-from ..props.render import ENGINE_ID
+from ..props.render import ENGINE_ID, chosen_backend
 from ..tracer import background_compile
 
 
 def uses_local_kernel(scene) -> bool:
     """Whether `scene` renders with this engine's Numba kernel on this computer (not on a Dask farm, whose
-    workers compile their own, and not with the NumPy backend)."""
+    workers compile their own, and not with the NumPy backend or on the GPU)."""
     settings = scene.spectral
-    return scene.render.engine == ENGINE_ID and settings.backend == "numba" and not settings.scheduler_address
+    return scene.render.engine == ENGINE_ID and chosen_backend(settings) == "numba" and not settings.scheduler_address
 
 
 @bpy.app.handlers.persistent

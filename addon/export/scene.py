@@ -44,6 +44,7 @@ from .media import export_medium, materials, shader_media, volume_material
 from .meshes import voxelise
 from .passes import pass_settings, spectrum_settings, unmade_warning
 from ..nodes.notes import Notes
+from ..props.render import chosen_backend
 from .volume_fields import VolumeFields
 from .volumes import volume_grids
 from .surfaces import export_surfaces, held_out, seen_by_camera
@@ -65,7 +66,7 @@ def render_settings(scene) -> RenderSettings:
     return RenderSettings(spp=s.samples, seed=s.seed, max_depth=s.max_bounces,
                           wavelength_sampling=s.wavelength_sampling, wavelengths_per_path=int(s.wavelengths_per_path),
                           lambda_min=s.lambda_min, lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf,
-                          backend=s.backend, noise_threshold=s.adaptive_threshold if s.use_adaptive_sampling else 0.0,
+                          backend=chosen_backend(s), noise_threshold=s.adaptive_threshold if s.use_adaptive_sampling else 0.0,
                           min_samples=s.adaptive_min_samples, transparent=bool(scene.render.film_transparent),
                           clamp_direct=s.clamp_direct, clamp_indirect=s.clamp_indirect)
 

@@ -11,7 +11,7 @@ from mathutils import Matrix, Vector
 
 from ..props import curves
 from ..export.lights import point_intensity
-from ..props.render import ENGINE_ID
+from ..props.render import ENGINE_ID, GPU_BACKEND
 from ..tracer import grids, spectra
 from ..tracer.scene import Camera, Grid, Light, Medium, RenderSettings
 from ..tracer.wavelengths import GRID
@@ -31,7 +31,11 @@ def new_scene(name: str, width: int, height: int, settings: RenderSettings):
     ours.bands, ours.wavelength_sampling = settings.bands, settings.wavelength_sampling
     ours.wavelengths_per_path = str(settings.wavelengths_per_path)
     ours.lambda_min, ours.lambda_max = settings.lambda_min, settings.lambda_max
-    ours.cmf, ours.backend = settings.cmf, settings.backend
+    ours.cmf = settings.cmf
+    if settings.backend == GPU_BACKEND:
+        ours.device = "GPU"
+    else:
+        ours.device, ours.backend = "CPU", settings.backend
     ours.use_adaptive_sampling = settings.noise_threshold > 0
     if settings.noise_threshold > 0:
         ours.adaptive_threshold = settings.noise_threshold

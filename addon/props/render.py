@@ -8,6 +8,13 @@ from ..tracer.wavelengths import LAMBDA_MAX, LAMBDA_MIN
 
 DEFAULTS = RenderSettings()
 ENGINE_ID = "SPECTRAL_VOLUME"  # the render engine's bl_idname; its panels show while it is the engine
+GPU_BACKEND = "cuda"  # the tracer backend (tracer/backends.py) that Device ▸ GPU Compute renders with
+
+
+def chosen_backend(settings) -> str:
+    """The tracer backend the Render settings choose: the GPU's for Device ▸ GPU Compute, else the CPU backend
+    chosen under Performance."""
+    return GPU_BACKEND if settings.device == "GPU" else settings.backend
 
 
 class SpectralRenderSettings(bpy.types.PropertyGroup):
@@ -89,7 +96,11 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
     spectral_exr_step: bpy.props.FloatProperty(name="Step", description="The width of every bin (nm); it must "
                                                "divide End − Start", default=DEFAULTS.spectrum_step, min=0.1,
                                                max=LAMBDA_MAX - LAMBDA_MIN)
-    backend: bpy.props.EnumProperty(name="Backend", description="Which kernel traces the paths",
+    device: bpy.props.EnumProperty(name="Device", description="Device to use for rendering", default="CPU", items=[
+        ("CPU", "CPU", "Render on the CPU, with the backend chosen under Performance"),
+        ("GPU", "GPU Compute", "Render on an NVIDIA GPU with CUDA (needs numba-cuda, which the extension does not "
+         "bundle, and NVIDIA's driver; see the README)")])
+    backend: bpy.props.EnumProperty(name="Backend", description="Which kernel traces the paths on the CPU",
                                     default=DEFAULTS.backend, items=[
         ("numba", "Numba", "Compiled kernel (fast)"),
         ("numpy", "NumPy", "Reference kernel without a compiler")])

@@ -1,16 +1,22 @@
 """Render settings (Properties editor ▸ Render) and per-object volume settings (▸ Object)."""
 
+import functools
+import textwrap
+
 import bpy
 
 from ..export.fluids import fluid_domain
 from ..operators.emulation import ESTIMATES
 from ..tracer import denoise
+from ..tracer.kernels import cuda_target
 from .panel import SpectralPanel
 
 
 def draw_render_main(layout, scene) -> None:
     settings = scene.spectral
     layout.prop(settings, "renderer")
+    if settings.renderer == "TRACER":
+        draw_device(layout, settings)
     column = layout.column(align=True)
     row = column.row(heading="Noise Threshold", align=True)
     row.prop(settings, "use_adaptive_sampling", text="")
@@ -27,6 +33,23 @@ def draw_render_main(layout, scene) -> None:
     draw_denoise(layout, settings)
     if settings.renderer == "CYCLES":
         draw_emulation(layout.box(), scene)
+
+
+@functools.cache
+def gpu_problem():
+    """Why the GPU cannot render here (None where it can), asked once per Blender session: the first ask imports
+    numba-cuda and looks for the driver, which takes a moment."""
+    return cuda_target.device_problem()
+
+
+def draw_device(layout, settings) -> None:
+    """The Device, with what stops the GPU from rendering where it cannot (the render would fail saying so)."""
+    layout.prop(settings, "device")
+    if settings.device == "GPU" and gpu_problem():
+        column = layout.column(align=True)
+        column.alert = True
+        for number, line in enumerate(textwrap.wrap(gpu_problem(), 56)):
+            column.label(text=line, icon="ERROR" if number == 0 else "BLANK1")
 
 
 def draw_denoise(layout, settings) -> None:
@@ -108,7 +131,9 @@ class SPECTRAL_PT_render_performance(RenderPanel, bpy.types.Panel):
 
     def draw_settings(self, layout, context):
         settings = context.scene.spectral
-        layout.prop(settings, "backend")
+        backend = layout.row()
+        backend.active = settings.device == "CPU"
+        backend.prop(settings, "backend")
         layout.prop(settings, "scheduler_address")
 
 

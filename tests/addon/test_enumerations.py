@@ -7,6 +7,7 @@ offered). Read from Blender's registered RNA, as a user sees the menus."""
 import pytest
 
 from addon.export.scene import render_settings
+from addon.props.render import GPU_BACKEND
 from addon.tracer import backends, colorimetry, scene as tracer_scene, spectra
 from addon.tracer.kernels import layout
 from addon.tracer.scene import RenderSettings
@@ -18,7 +19,7 @@ bpy = pytest.importorskip("bpy")
 ENUMERATIONS = [
     ("SpectralRenderSettings", "wavelength_sampling", tracer_scene.WAVELENGTH_SAMPLINGS, True),
     ("SpectralRenderSettings", "cmf", colorimetry.CMF_NAMES, True),
-    ("SpectralRenderSettings", "backend", backends.NAMES, True),
+    ("SpectralRenderSettings", "backend", tuple(name for name in backends.NAMES if name != GPU_BACKEND), True),
     ("SpectralRenderSettings", "wavelengths_per_path", tuple(map(str, layout.WAVELENGTHS_PER_PATH)), True),
     ("SpectralMaterialSettings", "phase", layout.PHASES, True),
     ("SpectralLightSettings", "unit", tracer_scene.LIGHT_UNITS, True),

@@ -132,3 +132,20 @@ def test_a_scene_files_film_transparent_is_imported(registered):
 
     assert not new_scene("Opaque", 8, 8, RenderSettings()).render.film_transparent
     assert new_scene("Clear", 8, 8, dataclasses.replace(RenderSettings(), transparent=True)).render.film_transparent
+
+
+def test_a_scene_files_backend_is_imported_as_device_and_backend(registered):
+    """A file rendered on the GPU imports as Device ▸ GPU Compute (and exports as it came); a CPU backend as
+    Device ▸ CPU with that backend."""
+    import dataclasses
+
+    from addon.export.scene import render_settings
+    from addon.importer.parts import new_scene
+    from addon.props.render import GPU_BACKEND
+    from addon.tracer.scene import RenderSettings
+
+    gpu = new_scene("Gpu", 8, 8, dataclasses.replace(RenderSettings(), backend=GPU_BACKEND))
+    assert gpu.spectral.device == "GPU" and render_settings(gpu).backend == GPU_BACKEND
+    oracle = new_scene("Oracle", 8, 8, dataclasses.replace(RenderSettings(), backend="numpy"))
+    assert (oracle.spectral.device, oracle.spectral.backend) == ("CPU", "numpy")
+    assert render_settings(oracle).backend == "numpy"

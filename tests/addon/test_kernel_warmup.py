@@ -33,7 +33,8 @@ def test_switching_to_the_engine_starts_the_compile_once(starts):
     assert starts == [scene.name]
 
 
-@pytest.mark.parametrize("setting, value", [("backend", "numpy"), ("scheduler_address", "tcp://farm:8786")])
+@pytest.mark.parametrize("setting, value", [("backend", "numpy"), ("scheduler_address", "tcp://farm:8786"),
+                                            ("device", "GPU")])
 def test_no_compile_where_the_local_kernel_is_not_used(starts, setting, value):
     scene = bpy.context.scene
     setattr(scene.spectral, setting, value)

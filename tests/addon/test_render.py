@@ -287,3 +287,25 @@ def test_unreachable_scheduler_is_reported_and_writes_nothing(registered, tmp_pa
     with pytest.raises(RuntimeError, match="Render failed, nothing written: cannot reach the Dask scheduler"):
         bpy.ops.spectral.render_image(image_name="Farm")
     assert "Farm" not in bpy.data.images
+
+
+def test_f12_on_a_gpu_that_is_not_there_says_why_and_writes_nothing(registered, tmp_path, monkeypatch):
+    """Device ▸ GPU Compute where no CUDA device is usable (CI's machines have no NVIDIA driver; on one with a GPU
+    its absence is pretended): F12 and Render to Image stop with the backend's own message, naming what is
+    missing, and touch nothing."""
+    from addon.tracer.kernels import cuda_target
+
+    if cuda_target.device_problem() is None:
+        monkeypatch.setattr(cuda_target, "device_problem", lambda: "No usable CUDA device: (pretended by the test)")
+    scene, _cloud = basic_scene(tmp_path)
+    scene.render.engine = "SPECTRAL_VOLUME"
+    scene.spectral.device = "GPU"
+    output = tmp_path / "f12.exr"
+    output.write_bytes(b"previous render")
+    scene.render.filepath = str(output)
+    with pytest.raises(RuntimeError, match=r"No usable CUDA device|numba-cuda"):
+        bpy.ops.render.render(write_still=True)
+    assert output.read_bytes() == b"previous render"
+    with pytest.raises(RuntimeError, match=r"Render failed, nothing written: (No usable CUDA device|.*numba-cuda)"):
+        bpy.ops.spectral.render_image(image_name="Gpu")
+    assert "Gpu" not in bpy.data.images

@@ -325,3 +325,25 @@ def test_labels_are_ready_for_translation():
             if isinstance(node, ast.keyword) and node.arg == "text" and isinstance(node.value, ast.JoinedStr):
                 found.append(f"{path.name}:{node.value.lineno}")
     assert found == []
+
+
+def test_device_draws_with_why_the_gpu_cannot_render_here(registered, monkeypatch):
+    """Device sits under Renderer for the tracer (not for the Cycles emulation, which Cycles renders); with GPU
+    Compute where no CUDA device is usable, the reason is drawn under it; Backend is greyed out for the GPU."""
+    from addon.ui import render as render_ui
+
+    scene, volume, material, _lights = _scene_with_everything()
+    context = _context(scene, volume, material)
+    layout = draw(bpy.types.SPECTRAL_PT_render, context)
+    assert ("prop", (scene.spectral, "device"), {}) in layout.calls
+    monkeypatch.setattr(render_ui, "gpu_problem", lambda: "No usable CUDA device: the NVIDIA driver is missing.")
+    scene.spectral.device = "GPU"
+    layout = draw(bpy.types.SPECTRAL_PT_render, context)
+    assert any("No usable CUDA device" in text for text in layout.texts())
+    performance = draw(bpy.types.SPECTRAL_PT_render_performance, context)
+    assert performance.setting_before(performance.index("prop", scene.spectral, "backend"), "active") is False
+    monkeypatch.setattr(render_ui, "gpu_problem", lambda: None)
+    assert not any("CUDA" in text for text in draw(bpy.types.SPECTRAL_PT_render, context).texts())
+    scene.spectral.renderer = "CYCLES"
+    calls = draw(bpy.types.SPECTRAL_PT_render, context).calls
+    assert ("prop", (scene.spectral, "device"), {}) not in calls
