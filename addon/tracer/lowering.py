@@ -258,6 +258,7 @@ def _textures(surfaces: tuple[Surface, ...]) -> dict:
                        int(texture.srgb))
         texels.append(image.reshape(-1, 3))
     spectra = texel_spectra.lattice_spectra() if total else np.zeros((0, GRID.size))
+    spectra.flags.writeable = False  # as the lattice's (cached): the kernel's argument types, textures or none
     return dict(texture_offset=offset, texture_shape=shape, texture_mode=mode,
                 texels=np.ascontiguousarray(np.concatenate(texels)), rgb_spectra=spectra)
 

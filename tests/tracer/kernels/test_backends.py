@@ -444,3 +444,21 @@ def test_chunks_do_not_change_the_image(kernel_scene, monkeypatch):
     chunked = render_unit(kernel_scene, 0, (0, 6), (0, 0, 8, 8), 3, "numpy")
     for index in range(2):
         np.testing.assert_allclose(chunked[index], whole[index], rtol=1e-12)
+
+
+def test_every_scene_gives_the_kernel_the_same_argument_types():
+    """Media, lights, surfaces, textures, light passes and spectral bins change the kernel's arguments' values and
+    shapes, never their Numba types (dtype, dimensions, layout, writeability): one compiled kernel renders every
+    scene, where a second type would compile a second kernel of minutes (a textured surface's read-only RGB lattice
+    once did)."""
+    import numba
+
+    from addon.tracer.backends import tile_arguments
+
+    kinds = {}
+    for name, build in SCENES.items():
+        scene = build()
+        arguments = tile_arguments(compile_scene(scene), 0, (0, 1), (0, 0, 1, 1), 1,
+                                   light_categories(scene.settings), scene.settings.spectrum)
+        kinds.setdefault(str(numba.typeof(arguments)), []).append(name)
+    assert len(kinds) == 1, list(kinds.values())
