@@ -51,6 +51,8 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     parser.add_argument("--resolution", metavar="WxH", help="image size in pixels (default: the scene's)")
     parser.add_argument("--percentage", type=int, help="resolution scale in percent (default: the scene's)")
     parser.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
+    parser.add_argument("--device", choices=("CPU", "GPU"), help="Render ▸ Device to render on, as Cycles' "
+                        "--cycles-device (default: the scene's): GPU renders with the CUDA backend")
     parser.add_argument("--scheduler", help="Dask scheduler tcp://HOST:PORT to render on (default: the scene's "
                                             "Render setting; empty: this computer)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -143,6 +145,8 @@ def render_blend(args, written: list):
         scene.render.resolution_percentage = args.percentage
     if args.spectral_exr is not None:
         scene.spectral.spectral_exr = True
+    if args.device is not None:
+        scene.spectral.device = args.device
     for frame in frames or [scene.frame_current]:
         try:
             yield _render_frame(scene, frame, args, written)

@@ -1,5 +1,7 @@
 """Rendering: the Spectral Volume engine (F12), Render to Image, the render job, and the CLI."""
 
+import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -221,9 +223,9 @@ def test_cli_command_is_registered_and_removed(clean):
     assert cli._handle is None
 
 
-def _run_cli(*args):
+def _run_cli(*args, env=None):
     return subprocess.run([sys.executable, "-m", "addon.cli", *map(str, args)], cwd=ROOT, capture_output=True,
-                          text=True, timeout=600)
+                          text=True, timeout=600, env=env)
 
 
 def _save_blend(tmp_path):
@@ -255,6 +257,32 @@ def test_cli_reports_bad_input_and_keeps_the_output(registered, tmp_path):
     missing = _run_cli("render", tmp_path / "nowhere.blend", "--out", out)
     assert missing.returncode == 1 and "nowhere.blend does not exist" in missing.stderr
     assert _run_cli("draw").returncode == 2
+
+
+def test_cli_device_overrides_the_scenes_and_a_missing_gpu_is_named(registered, tmp_path):
+    """--device, as Cycles' --cycles-device: a file saved with Device ▸ GPU Compute renders on the CPU with
+    `--device CPU`; on the GPU where no CUDA driver loads (one is pretended missing) it exits 1 naming what is
+    missing and keeps the output, as `--device GPU` does with a file saved for the CPU."""
+    scene, _cloud = basic_scene(tmp_path)
+    scene.spectral.device = "GPU"
+    blend = tmp_path / "gpu.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    out = tmp_path / "cli.exr"
+    done = _run_cli("render", blend, "--out", out, "--device", "CPU", "--spp", 1, "--quiet")
+    assert done.returncode == 0, done.stderr
+    assert image_io.read_exr(out)["ViewLayer.XYZ.Y"].max() > 0
+    out.write_bytes(b"previous render")
+    no_driver = dict(os.environ, NUMBA_CUDA_DRIVER=str(tmp_path / "no-driver.so"))
+    for device in ([], ["--device", "GPU"]):
+        done = _run_cli("render", blend, "--out", out, *device, "--spp", 1, "--quiet", env=no_driver)
+        assert done.returncode == 1 and "Traceback" not in done.stderr
+        assert re.search(r"error: .*(No usable CUDA device|numba-cuda)", done.stderr), done.stderr
+        assert out.read_bytes() == b"previous render"
+    scene.spectral.device = "CPU"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    done = _run_cli("render", blend, "--out", out, "--device", "GPU", "--spp", 1, "--quiet", env=no_driver)
+    assert done.returncode == 1 and "No usable CUDA device" in done.stderr
+    assert "invalid choice" in _run_cli("render", blend, "--out", out, "--device", "OPTIX").stderr
 
 
 def test_cli_renders_the_scene_it_is_asked_for(registered, tmp_path):
