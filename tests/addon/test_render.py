@@ -98,16 +98,21 @@ def test_render_to_image_and_the_cli_place_the_render_region_as_f12(registered, 
     np.testing.assert_array_equal(pixels[..., 3], alpha)
 
 
-def test_f12_with_bad_input_reports_and_keeps_the_old_file(registered, tmp_path):
-    scene, cloud = basic_scene(tmp_path)
-    cloud.data.filepath = str(tmp_path / "gone.vdb")
+def f12_fails_and_keeps_the_old_file(scene, tmp_path, match):
+    """F12 with the Spectral Volume engine raises `match` and leaves the previous render's file as it was."""
     scene.render.engine = "SPECTRAL_VOLUME"
     output = tmp_path / "f12.exr"
     output.write_bytes(b"previous render")
     scene.render.filepath = str(output)
-    with pytest.raises(RuntimeError, match=r"Volume 'Cloud': VDB file .*gone.vdb does not exist"):
+    with pytest.raises(RuntimeError, match=match):
         bpy.ops.render.render(write_still=True)
     assert output.read_bytes() == b"previous render"
+
+
+def test_f12_with_bad_input_reports_and_keeps_the_old_file(registered, tmp_path):
+    scene, cloud = basic_scene(tmp_path)
+    cloud.data.filepath = str(tmp_path / "gone.vdb")
+    f12_fails_and_keeps_the_old_file(scene, tmp_path, r"Volume 'Cloud': VDB file .*gone.vdb does not exist")
 
 
 def test_render_to_image_fills_a_float_image_and_an_exr(registered, tmp_path):
@@ -304,14 +309,8 @@ def test_cli_renders_the_scene_it_is_asked_for(registered, tmp_path):
 
 def test_unreachable_scheduler_is_reported_and_writes_nothing(registered, tmp_path):
     scene, _cloud = basic_scene(tmp_path)
-    scene.render.engine = "SPECTRAL_VOLUME"
     scene.spectral.scheduler_address = "tcp://127.0.0.1:9"  # the discard port: nothing listens there
-    output = tmp_path / "f12.exr"
-    output.write_bytes(b"previous render")
-    scene.render.filepath = str(output)
-    with pytest.raises(RuntimeError, match=r"cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
-        bpy.ops.render.render(write_still=True)
-    assert output.read_bytes() == b"previous render"
+    f12_fails_and_keeps_the_old_file(scene, tmp_path, r"cannot reach the Dask scheduler at tcp://127.0.0.1:9")
     with pytest.raises(RuntimeError, match="Render failed, nothing written: cannot reach the Dask scheduler"):
         bpy.ops.spectral.render_image(image_name="Farm")
     assert "Farm" not in bpy.data.images
@@ -326,14 +325,8 @@ def test_f12_on_a_gpu_that_is_not_there_says_why_and_writes_nothing(registered, 
     if cuda_target.device_problem() is None:
         monkeypatch.setattr(cuda_target, "device_problem", lambda: "No usable CUDA device: (pretended by the test)")
     scene, _cloud = basic_scene(tmp_path)
-    scene.render.engine = "SPECTRAL_VOLUME"
     scene.spectral.device = "GPU"
-    output = tmp_path / "f12.exr"
-    output.write_bytes(b"previous render")
-    scene.render.filepath = str(output)
-    with pytest.raises(RuntimeError, match=r"No usable CUDA device|numba-cuda"):
-        bpy.ops.render.render(write_still=True)
-    assert output.read_bytes() == b"previous render"
+    f12_fails_and_keeps_the_old_file(scene, tmp_path, r"No usable CUDA device|numba-cuda")
     with pytest.raises(RuntimeError, match=r"Render failed, nothing written: (No usable CUDA device|.*numba-cuda)"):
         bpy.ops.spectral.render_image(image_name="Gpu")
     assert "Gpu" not in bpy.data.images
