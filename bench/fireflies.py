@@ -177,11 +177,11 @@ class Recorder:
         e["transmittance"].append(np.full(hit.size, np.nan) if transmittance is None else transmittance[hit])
         e["value"].append(value[hit])
 
-    def _next_event(self, ks, paths, vertex, isotropic, radiance):
+    def _next_event(self, ks, paths, vertex, isotropic, radiance, probing=False, held=None):
         before = radiance[paths.id].sum(axis=1)
         self.capture = {}
         try:
-            self.saved["_next_event"](ks, paths, vertex, isotropic, radiance)
+            self.saved["_next_event"](ks, paths, vertex, isotropic, radiance, probing, held)
             capture = self.capture
         finally:
             self.capture = None

@@ -37,6 +37,7 @@ from .kernels.layout import (
 from .kernels.media import attenuation
 from .lights import kernel_spectrum, selection_powers, surface_power, texel_weights
 from .majorant import block_size_for, glow_floor, majorant_grid, minorant_grid
+from .probe_grid import no_probe, with_probe
 from .scene import Grid, Light, Medium, Scene, Surface
 from .spectral_film import bin_edges
 from .wavelength_modes import default_band, with_band
@@ -208,7 +209,7 @@ def _light_arrays(lights: tuple[Light, ...], media: tuple[Medium, ...], cmf: str
     power = selection_powers(lights, out["spd"], media, cmf)
     out["pmf"] = _selection_pmf(power)
     out["power"] = power
-    return KernelLights(**out)
+    return KernelLights(**out, **no_probe())
 
 
 def _selection_pmf(power: np.ndarray) -> np.ndarray:
@@ -335,7 +336,8 @@ def _with_surface_lights(lights: KernelLights, surfaces: tuple[Surface, ...], em
         cos=np.concatenate([lights.cos, np.ones(extra)]),
         smooth=np.concatenate([lights.smooth, np.zeros(extra)]),
         pmf=_selection_pmf(power),
-        power=power)
+        power=power,
+        **no_probe())
 
 
 def _envmap_arrays(lights: tuple[Light, ...], cmf: str) -> KernelEnvmaps:
@@ -418,4 +420,4 @@ def compile_scene(scene: Scene) -> KernelScene:
                                       clamp_indirect=float(settings.clamp_indirect),
                                       xyz_to_rgb=np.array(colorimetry.xyz_to_rgb_matrix("rec709"))),
     )
-    return with_band(kernel_scene, settings.wavelength_sampling, *default_band(settings))
+    return with_band(with_probe(kernel_scene), settings.wavelength_sampling, *default_band(settings))

@@ -156,6 +156,26 @@ def phase_sampled(beta, r_u, phase, pdf0):
     return beta * (phase / pdf0), r_u * (phase / pdf0), r_u / pdf0
 
 
+# ----------------------------------------------------------------------------- the sunward probe
+
+@shared
+def probe_sampled(beta, r_u, phase, chance, sun_phase):
+    """(β, r_u) of a sunward probe from a vertex where the path had (β, r_u), along a direction where this
+    wavelength's phase function is `phase` and the probe's pdf (the phase function about the sun) `sun_phase`:
+    β takes the phase; r_u the pdf of both strategies that draw the direction, the path's phase sampling and
+    the probe drawn with probability `chance` (the balance heuristic; no division by the chance, which the sum
+    holds)."""
+    return beta * phase, r_u * (phase + chance * sun_phase)
+
+
+@shared
+def probe_weight(phase, chance, sun_phase):
+    """The factor of r_u in the path's next sun estimate, after phase sampling drew a direction where this
+    wavelength's phase is `phase` and the probe's pdf `sun_phase`: both strategies' pdf over the path's own
+    (1 where the path's phase is 0: no probe is sent from such a vertex)."""
+    return select(phase > 0.0, (phase + chance * sun_phase) / phase, 1.0)
+
+
 @shared
 def lambert_sampled(beta, r_u, reflectance, pdf0):
     """(β, r_u, r_l) after a cosine-weighted direction of pdf pdf0 leaving a Lambertian surface: the pdf is

@@ -158,6 +158,12 @@ class KernelLights(NamedTuple):
     smooth: np.ndarray  # (NL,) spot edge width in cosine
     pmf: np.ndarray  # (NL,) selection probability for next-event estimation
     power: np.ndarray  # (NL,) selection power (`lights.selection_powers`) that `pmf` normalises
+    # The sunward probe (`probe_grid`, docs/algorithm.md): the sun it aims at ((1,), -1: no probe), the chance of a
+    # probe at a medium vertex per cell of a grid over the media's box (N, N, N), and that box ((2, 3): its lower
+    # corner, then cells per unit length along each axis)
+    probe: np.ndarray
+    probe_chance: np.ndarray
+    probe_box: np.ndarray
 
 
 class KernelEnvmaps(NamedTuple):

@@ -67,6 +67,18 @@ def trilinear(data, offset, shape, x, y, z):
     return total + wx1 * wy1 * wz1 * data[offset + x1 + y1 + z1]
 
 
+@shared
+def probe_chance(ks, x, y, z):
+    """The chance of a sunward probe at medium vertex (x, y, z) (`probe_grid`): its cell's, the nearest cell's
+    outside the grid."""
+    chance, box = ks.lights.probe_chance, ks.lights.probe_box
+    last = chance.shape[0] - 1.0
+    i = np.int64(np.minimum(np.maximum((x - box[0, 0]) * box[1, 0], 0.0), last))
+    j = np.int64(np.minimum(np.maximum((y - box[0, 1]) * box[1, 1], 0.0), last))
+    k = np.int64(np.minimum(np.maximum((z - box[0, 2]) * box[1, 2], 0.0), last))
+    return chance[i, j, k]
+
+
 # u is clamped below 1 (a u of 1 would pass the cdf's last node), and the position in a bin stays below 1 by
 # far more than rounding, so that what is placed by it stays inside the bin.
 _U_BELOW_ONE = 1.0 - 2.0**-53

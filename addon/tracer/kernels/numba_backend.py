@@ -70,8 +70,8 @@ from .dda import axis_entry, axis_span
 from .estimator import (
     attenuates_alike, camera_estimate, collision_estimate, companion_uniform, controls_transmittance,
     hit_light_contribution, hit_light_ratio, lambert_sampled, light_sample_ratio, next_event_contribution,
-    null_collision, phase_sampled, ratio_tracked, real_collision, real_probability, residual_tracked,
-    roulette_survival, shadow_bound, shadow_roulette)
+    null_collision, phase_sampled, probe_sampled, probe_weight, ratio_tracked, real_collision, real_probability,
+    residual_tracked, roulette_survival, shadow_bound, shadow_roulette)
 from .geometry import camera_ray, normalize, transform_point, transform_vector
 from .layout import (
     BVH_STACK,
@@ -96,7 +96,7 @@ from .light_sampling import (
 from .light_split import (
     AFTER_NEE, BACKGROUND, EMISSION, ENVIRONMENT, FIRST, MARKS, MEDIUM, NOTHING, SECOND, SURFACE, clamp_factor,
     clamped_mark, direct_slot)
-from .lookups import on_grid, table_at
+from .lookups import on_grid, probe_chance, table_at
 from .media import (
     albedo,
     attenuation,
@@ -131,6 +131,12 @@ EVENT_ESCAPE, EVENT_SCATTER, EVENT_ABSORB = 0, 1, 2
 SPEC_EXTINCTION, SPEC_EXCITATION, SPEC_EMISSION_PDF, SPEC_ANISOTROPY, SPEC_ALBEDO, SPEC_GLOW, SPEC_GLOW_BLACKBODY = (
     0, 1, 2, 3, 4, 5, 6)
 SPEC_ROWS = 7
+# Rows of a path's sunward probe state path.probe[row, wavelength] (`_probe_from`): the path's β and r_u at its
+# vertex before it drew its direction; its β, r_u and r_l while a probe is traced; the factor of r_u in its next
+# sun estimate (`estimator.probe_weight`); the probe's pdf at a direction; and the light a probe from the camera
+# path's first vertex brought, which counts as indirect (`_mark`).
+START_BETA, START_R_U, SAVED_BETA, SAVED_R_U, SAVED_R_L, WEIGHT, SUN_PHASE, HELD = range(8)
+PROBE_ROWS = 8
 
 
 # ----------------------------------------------------------------------------- small helpers
@@ -629,8 +635,9 @@ def _sample_lambert(n, path, hit):
 # wavelengths (the hero changes at fluorescence), the media's spectra at them (`_fill_spectral_cache`),
 # throughput, the MIS pdf ratios of unidirectional and light sampling, the radiance collected, and the camera
 # path's transparency (one value: `_see_through`); for light passes and clamping, the camera path's marks of its
-# radiance and what it met first and how many marks it has taken (`light_split`).
-Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance transparent marks first")
+# radiance and what it met first and how many marks it has taken (`light_split`); the sunward probe's rows
+# (`_probe_from`, `PROBE_ROWS`).
+Path = namedtuple("Path", "stream lam_cam pdf_cam lams spec beta r_u r_l radiance transparent marks first probe")
 # Medium coefficients at a point (`_coefficients`): per wavelength summed over media, and per medium;
 # `dye` holds the dyes' absorption at their mean excitation (`fluorescent_reservoir`'s optical depth).
 Coefficients = namedtuple("Coefficients", "sigma_a sigma_s emission medium_s medium_fl dye")
@@ -661,7 +668,7 @@ def _new_path(media):
                 local_empty(MAX_LAMBDAS, f), local_empty((media, SPEC_ROWS, MAX_LAMBDAS), f),
                 local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f), local_empty(MAX_LAMBDAS, f),
                 local_empty(MAX_LAMBDAS, f), local_zeros(1, f), local_zeros((MARKS, MAX_LAMBDAS), f),
-                local_zeros(2, np.int64))
+                local_zeros(2, np.int64), local_zeros((PROBE_ROWS, MAX_LAMBDAS), f))
 
 
 @shared_inline_always
@@ -770,9 +777,10 @@ def _path_spectrum(ks, n, path, sum_spectrum, row, column):
 
 @shared_inline
 def _mark(n, path, index):
-    """Take the camera path's mark `index` of its radiance (`light_split`): the next one it takes."""
+    """Take the camera path's mark `index` of its radiance (`light_split`): the next one it takes. The second
+    leaves out what probes from the first vertex brought (`HELD`): light scattered at a second vertex, indirect."""
     for i in range(n):
-        path.marks[index, i] = path.radiance[i]
+        path.marks[index, i] = path.radiance[i] - path.probe[HELD, i] if index == SECOND else path.radiance[i]
     path.first[1] = index + 1
 
 
@@ -940,13 +948,20 @@ def _transmittance(ks, ox, oy, oz, dx, dy, dz, t_max, residual, n, path, light, 
 
 
 @shared_inline
-def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, on_surface, grey, n, path, vertex, light, tracker, hit):
+def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, on_surface, grey, n, path, vertex, light, tracker, hit,
+                probing, weighted, hold):
     """Next-event estimation from a scattering vertex in a medium or on a surface (`on_surface`: the BRDF
     ρ/π, `hit`): one light chosen by its pmf, a shadow ray that a surface stops, ratio-tracked transmittance
     (residual ratio tracking towards delta lights and on `grey` paths), MIS against phase or BRDF sampling
     (balance heuristic over wavelengths and strategies). `light.phase` holds the sampling pdf of the
-    direction, which at a medium is also the phase function's value."""
-    chosen = choose_light(ks.lights.pmf, _next(path.stream))
+    direction, which at a medium is also the phase function's value.
+
+    At a sunward probe's vertex (`probing`): the probe's sun, chosen with certainty (its estimate times the
+    chance the path's own choice gives it), and with `hold` the light is also held for the marks (`HELD`, which
+    only the second mark reads).
+    With `weighted` (the path's first vertex after a probing one), the sun's estimate weighs the probe's
+    strategy in (`probe.weight`)."""
+    chosen = ks.lights.probe[0] if probing else choose_light(ks.lights.pmf, _next(path.stream))
     u1, u2 = _next(path.stream), _next(path.stream)
     wx, wy, wz, direction_pdf, distance, delta = _sample_light(ks, chosen, ox, oy, oz, u1, u2, path.lams, n,
                                                                light.radiance)
@@ -968,14 +983,20 @@ def _next_event(ks, ox, oy, oz, dx, dy, dz, isotropic, on_surface, grey, n, path
         return
     _transmittance(ks, ox, oy, oz, wx, wy, wz, distance, delta or grey, n, path, light, tracker)
     light_pdf = ks.lights.pmf[chosen] * direction_pdf
+    weighted = weighted and chosen == ks.lights.probe[0]
     for i in range(n):
-        light.r_l[i] = light_sample_ratio(path.r_u[i], light_pdf, light.phase[i], light.survival[i], delta)
+        r_u = path.r_u[i] * path.probe[WEIGHT, i] if weighted else path.r_u[i]
+        light.r_l[i] = light_sample_ratio(r_u, light_pdf, light.phase[i], light.survival[i], delta)
     mean_r = _mean(light.r_l, n)
     if mean_r > 0.0:
+        share = ks.lights.pmf[chosen] if probing else 1.0
         for i in range(n):
             value = light.phase[i] * hit.reflectance[i] if on_surface else light.phase[i]
-            path.radiance[i] += next_event_contribution(path.beta[i], value, light.transmittance[i],
-                                                        light.radiance[i], mean_r)
+            contribution = share * next_event_contribution(path.beta[i], value, light.transmittance[i],
+                                                           light.radiance[i], mean_r)
+            path.radiance[i] += contribution
+            if hold:
+                path.probe[HELD, i] += contribution
 
 
 @shared_inline
@@ -1010,7 +1031,7 @@ def _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, ver
 
 
 @shared_inline
-def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, n, path, vertex, tracker, fl,
+def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, collect, n, path, vertex, tracker, fl,
                  light):
     """Delta tracking to the next real event before t_max (a surface; EVENT_ESCAPE there), collecting emission
     (thermal, glow) and offering fluorescent sources at every tentative collision and weighting null collisions
@@ -1021,7 +1042,10 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, 
 
     With `controls` (a grey path after a scattering vertex, `_is_grey`), light sampling's MIS ratio `r_l`
     takes no null-event probabilities: the controls are integrated instead, and an escaping path's
-    survival is their transmittance, as a shadow ray's (`_transmittance`)."""
+    survival is their transmittance, as a shadow ray's (`_transmittance`).
+
+    Without `collect` (a sunward probe's segment, which looks only for its next real collision), nothing is
+    collected or offered and no area light is looked for."""
     beta, r_u, r_l = path.beta, path.r_u, path.r_l
     sigma_a, sigma_s = vertex.sigma_a, vertex.sigma_s
     _tracker_start(ks, ox, oy, oz, dx, dy, dz, 0.0, t_max, tracker)
@@ -1030,7 +1054,7 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, 
             tracker.state_f[m, DEPTH] = 0.0
     fl.tau[0] = 0.0
     t, t_end, sigma_bar = 0.0, STALE, 0.0
-    t_light, seen = _next_area_light(ks, ox, oy, oz, dx, dy, dz, 0.0, -1, t_max)
+    t_light, seen = _next_area_light(ks, ox, oy, oz, dx, dy, dz, 0.0, -1, t_max) if collect else (INF, -1)
     while True:
         t, t_end, sigma_bar = _tentative_collision(ks, path.stream, tracker, t, t_end, sigma_bar, controls, False)
         while t > t_light:
@@ -1040,11 +1064,12 @@ def _free_flight(ks, ox, oy, oz, dx, dy, dz, t_max, depth, controls, scattered, 
             return EVENT_ESCAPE, ox, oy, oz, 0.0
         qx, qy, qz = ox + t * dx, oy + t * dy, oz + t * dz
         _coefficients(ks, qx, qy, qz, path.lams, path.spec, n, vertex)
-        mean_r_u = _mean(r_u, n)
-        for i in range(n):
-            if vertex.emission[i] > 0.0:
-                path.radiance[i] += collision_estimate(beta[i] * vertex.emission[i], sigma_bar, mean_r_u)
-        _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, vertex, fl)
+        if collect:
+            mean_r_u = _mean(r_u, n)
+            for i in range(n):
+                if vertex.emission[i] > 0.0:
+                    path.radiance[i] += collision_estimate(beta[i] * vertex.emission[i], sigma_bar, mean_r_u)
+            _offer_fluorescence(ks, qx, qy, qz, sigma_bar, mean_r_u, depth, n, path, vertex, fl)
         choice = _next(path.stream) * sigma_bar
         if choice < sigma_a[0] + sigma_s[0]:
             # A real collision scatters, weighted by the albedo: absorption lowers the throughput
@@ -1108,11 +1133,10 @@ def _start_fluorescent_branch(ks, path, fl, k):
 
 
 @shared_inline
-def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
-    """Phase sampling of the next direction (the hero's phase; MIS pdfs at every wavelength): the new
-    direction, or a zero vector when the hero's pdf is zero (the path ends)."""
+def _phase_direction(ks, ax, ay, az, isotropic, path, vertex):
+    """A direction drawn from the hero's phase function about the axis a (isotropic: uniformly): the cosine of
+    its angle to a, and the direction (not normalised)."""
     u1, u2 = _next(path.stream), _next(path.stream)
-    phase_values = light.phase
     if isotropic:
         new_cos = 1.0 - 2.0 * u1
     else:
@@ -1121,7 +1145,16 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
             new_cos = rayleigh_sample_cos(u1)
         else:
             new_cos = hg_sample_cos(path.spec[medium, SPEC_ANISOTROPY, 0], u1)
-    nx, ny, nz = sample_direction((dx, dy, dz), new_cos, u2)
+    nx, ny, nz = sample_direction((ax, ay, az), new_cos, u2)
+    return new_cos, nx, ny, nz
+
+
+@shared_inline
+def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
+    """Phase sampling of the next direction (the hero's phase; MIS pdfs at every wavelength, left in
+    `light.phase`): the new direction, or a zero vector when the hero's pdf is zero (the path ends)."""
+    phase_values = light.phase
+    new_cos, nx, ny, nz = _phase_direction(ks, dx, dy, dz, isotropic, path, vertex)
     if isotropic:
         for i in range(n):
             phase_values[i] = INV_FOUR_PI
@@ -1133,6 +1166,54 @@ def _sample_phase(ks, dx, dy, dz, isotropic, n, path, vertex, light):
     for i in range(n):
         path.beta[i], path.r_u[i], path.r_l[i] = phase_sampled(path.beta[i], path.r_u[i], phase_values[i], pdf0)
     return normalize(nx, ny, nz)
+
+
+@shared_inline
+def _probe_from(ks, ox, oy, oz, ix, iy, iz, dx, dy, dz, n, path, vertex, light):
+    """The sunward probe (`probe_grid`, docs/algorithm.md) at a medium vertex o where the path arrived along i and
+    has drawn its next direction d (its phase values there in `light.phase`, its β and r_u before the draw in
+    `START_*`). Where every wavelength scatters at o and the probe's chance a(o) is positive: the factor of
+    r_u in the path's next sun estimate (`WEIGHT`, `estimator.probe_weight`), then, with probability a(o), a
+    probe: a direction drawn from the phase function about the sun, and the path's β, r_u and r_l put aside
+    (`SAVED_*`) for the probe's (`estimator.probe_sampled`). Returns (whether the next sun estimate is weighted,
+    the probe's direction or a zero vector)."""
+    medium_s = vertex.medium_s
+    for i in range(n):
+        total = 0.0
+        for m in range(ks.media.density_scale.shape[0]):
+            total += medium_s[m, i]
+        if total <= 0.0:
+            return False, 0.0, 0.0, 0.0
+    chance = probe_chance(ks, ox, oy, oz)
+    if chance <= 0.0:
+        return False, 0.0, 0.0, 0.0
+    sun = ks.lights.probe[0]
+    wx, wy, wz = ks.lights.dir[sun, 0], ks.lights.dir[sun, 1], ks.lights.dir[sun, 2]
+    sun_phase = path.probe[SUN_PHASE]
+    _mixture_phase(ks, medium_s, path.spec, n, dx * wx + dy * wy + dz * wz, sun_phase)
+    for i in range(n):
+        path.probe[WEIGHT, i] = probe_weight(light.phase[i], chance, sun_phase[i])
+    if _next(path.stream) >= chance:
+        return True, 0.0, 0.0, 0.0
+    sun_cos, px, py, pz = _phase_direction(ks, wx, wy, wz, False, path, vertex)
+    px, py, pz = normalize(px, py, pz)
+    _mixture_phase(ks, medium_s, path.spec, n, sun_cos, sun_phase)
+    _mixture_phase(ks, medium_s, path.spec, n, ix * px + iy * py + iz * pz, light.phase)
+    for i in range(n):
+        path.probe[SAVED_BETA, i], path.probe[SAVED_R_U, i] = path.beta[i], path.r_u[i]
+        path.probe[SAVED_R_L, i] = path.r_l[i]
+        path.beta[i], path.r_u[i] = probe_sampled(path.probe[START_BETA, i], path.probe[START_R_U, i],
+                                                  light.phase[i], chance, sun_phase[i])
+        path.r_l[i] = path.r_u[i]
+    return True, px, py, pz
+
+
+@shared_inline
+def _end_probe(n, path):
+    """Back from a sunward probe: the path's β, r_u and r_l as they were."""
+    for i in range(n):
+        path.beta[i], path.r_u[i], path.r_l[i] = (path.probe[SAVED_BETA, i], path.probe[SAVED_R_U, i],
+                                                  path.probe[SAVED_R_L, i])
 
 
 @shared_inline
@@ -1159,34 +1240,67 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, ver
     """Transport from a camera ray, or (`emitted`) from an isotropic fluorescent emission at (ox, oy, oz)
     at vertex `depth`: collects the radiance per wavelength in `path.radiance` and offers fluorescent
     sources to `fl`. A vertex is a real collision in a medium or a surface the path reaches (`on_surface`).
-    With `marking` (a camera path, for light passes or clamping), the path takes its marks (`light_split`)."""
+    With `marking` (a camera path, for light passes or clamping), the path takes its marks (`light_split`).
+
+    A sunward probe (`_probe_from`) is a detour through the same stages: from its vertex o the probe's segment is
+    tracked to its next real collision, where its sun estimate is made, and the path goes on from o along its own
+    direction (kept in `back`), its weights restored (`_end_probe`)."""
     grey = _is_grey(ks, n, path.spec)
+    probes = ks.lights.probe[0] >= 0
     scattered = emitted
     at_vertex = emitted
     on_surface = False
+    probing = False  # on a probe's segment; `arrived`: it found its collision
+    arrived = False
+    weighted = False  # the next sun estimate weighs the probe's strategy in (the path left a probing vertex)
+    back = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # the path's vertex and direction while a probe is traced
     while True:
         if at_vertex:
-            if marking:
+            if marking and not probing:
                 _mark_vertex(n, path, on_surface)
-            if ks.lights.kind.shape[0] > 0:
+            if ks.lights.kind.shape[0] > 0 and (arrived or not probing):
                 _next_event(ks, ox, oy, oz, dx, dy, dz, emitted, on_surface, grey, n, path, vertex, light, tracker,
-                            hit)
-            if marking and path.first[1] == AFTER_NEE:
-                _mark(n, path, AFTER_NEE)
-            if on_surface:
-                dx, dy, dz = _sample_lambert(n, path, hit)
+                            hit, probing, weighted and not on_surface and not probing,
+                            probing and marking)
+            if probing:
+                ox, oy, oz, dx, dy, dz = back
+                _end_probe(n, path)
+                probing, arrived = False, False
             else:
-                dx, dy, dz = _sample_phase(ks, dx, dy, dz, emitted, n, path, vertex, light)
-            if dx == 0.0 and dy == 0.0 and dz == 0.0:
-                return
-            scattered = True
-            emitted = False
-            if not _survives_roulette(ks, depth, n, path):
+                weighted = False
+                if marking and path.first[1] == AFTER_NEE:
+                    _mark(n, path, AFTER_NEE)
+                probe_here = probes and not on_surface and not emitted and depth < ks.termination.max_depth
+                if probe_here:
+                    for i in range(n):
+                        path.probe[START_BETA, i], path.probe[START_R_U, i] = path.beta[i], path.r_u[i]
+                ix, iy, iz = dx, dy, dz
+                if on_surface:
+                    dx, dy, dz = _sample_lambert(n, path, hit)
+                else:
+                    dx, dy, dz = _sample_phase(ks, dx, dy, dz, emitted, n, path, vertex, light)
+                if dx == 0.0 and dy == 0.0 and dz == 0.0:
+                    return
+                scattered = True
+                emitted = False
+                if probe_here:
+                    weighted, px, py, pz = _probe_from(ks, ox, oy, oz, ix, iy, iz, dx, dy, dz, n, path, vertex, light)
+                    if px != 0.0 or py != 0.0 or pz != 0.0:
+                        probing = True
+                        back = (ox, oy, oz, dx, dy, dz)
+                        dx, dy, dz = px, py, pz
+            if not probing and not _survives_roulette(ks, depth, n, path):
                 return
         t_hit, triangle = _closest_hit(ks, ox, oy, oz, dx, dy, dz, INF, False, not scattered, hit)
-        controls = grey and scattered
-        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, t_hit, depth, controls, scattered, n,
-                                                    path, vertex, tracker, fl, light)
+        controls = grey and scattered and not probing
+        event, qx, qy, qz, sigma_bar = _free_flight(ks, ox, oy, oz, dx, dy, dz, t_hit, depth, controls, scattered,
+                                                    not probing, n, path, vertex, tracker, fl, light)
+        if probing:  # back to the vertex, through its sun estimate where the probe found a collision
+            arrived = event == EVENT_SCATTER
+            if arrived:
+                ox, oy, oz = qx, qy, qz
+            at_vertex = True
+            continue
         if event == EVENT_ABSORB:
             return
         if event == EVENT_ESCAPE:
@@ -1228,6 +1342,8 @@ def _trace(ks, ox, oy, oz, dx, dy, dz, splitting, n, path, vertex, light, tracke
     for j in range(RESERVOIRS):
         fl.total[j] = 0.0
     path.first[0], path.first[1] = NOTHING, FIRST
+    for i in range(n):
+        path.probe[HELD, i] = 0.0
     depth, emitted, count = 0, False, n
     while True:
         _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, splitting and not emitted, count, path, vertex, light,

@@ -41,8 +41,8 @@ from .dda import axis_entry, axis_span
 from .estimator import (
     attenuates_alike, camera_estimate, collision_estimate, companion_uniform, controls_transmittance,
     hit_light_contribution, hit_light_ratio, lambert_sampled, light_sample_ratio, next_event_contribution,
-    null_collision, phase_sampled, ratio_tracked, real_collision, real_probability, residual_tracked,
-    roulette_survival, shadow_bound, shadow_roulette)
+    null_collision, phase_sampled, probe_sampled, probe_weight, ratio_tracked, real_collision, real_probability,
+    residual_tracked, roulette_survival, shadow_bound, shadow_roulette)
 from .geometry import camera_depths, camera_ray, normalize, transform_point, transform_vector
 from .layout import LIGHT_AREA, PHASE_RAYLEIGH, SHADOW_ROULETTE_BELOW, SURFACE_OFFSET
 from .light_sampling import (
@@ -51,7 +51,7 @@ from .light_sampling import (
 from .light_split import (
     AFTER_NEE, BACKGROUND, CATEGORIES, EMISSION, ENVIRONMENT, FIRST, MARKS, MEDIUM, SECOND, SURFACE, clamp_factor,
     clamped_mark, direct_slot)
-from .lookups import on_grid, table_at
+from .lookups import on_grid, probe_chance, table_at
 from .rng import LOW_DISCREPANCY_DIMENSIONS, low_discrepancy, path_key, pixel_key, uniform
 from .spectrum_bins import spectrum_bin, spectrum_weight
 from .surfaces import (emitter_pdf, facing_normal, lambert_pdf, lambert_sample_cos, offset_point, rgb_reflectance,
@@ -467,8 +467,10 @@ def _arrive_at_surfaces(ks, paths, triangle, distance):
 
 def _surface_state(count, n):
     """A new batch's surface fields: not on a surface (`on_surface`), its normal and reflectance
-    (`_arrive_at_surfaces`)."""
-    return dict(on_surface=np.zeros(count, dtype=bool), normal=np.zeros((count, 3)), reflectance=np.zeros((count, n)))
+    (`_arrive_at_surfaces`); and its sunward probe's: whether the next sun estimate weighs the probe's strategy
+    in, and by what factor of r_u (`_probe`)."""
+    return dict(on_surface=np.zeros(count, dtype=bool), normal=np.zeros((count, 3)), reflectance=np.zeros((count, n)),
+                weighted=np.zeros(count, dtype=bool), weight=np.ones((count, n)))
 
 
 def _camera_paths(ks, px, py, pixel_keys, samples):
@@ -528,7 +530,7 @@ def _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl):
     fl.tau[ids] = tau + c.dye / sigma_bar
 
 
-def _free_flight(ks, paths, radiance, fl, t_max):
+def _free_flight(ks, paths, radiance, fl, t_max, collect=True):
     """Delta tracking of every path to its next real event before t_max (a surface, or INF), collecting emission
     (thermal, glow) and offering fluorescent sources at each tentative collision and weighting null collisions
     (spectral MIS ratios included). Grey paths after a scattering vertex (`_is_grey`) integrate their controls
@@ -536,13 +538,17 @@ def _free_flight(ks, paths, radiance, fl, t_max):
 
     Returns each path's event (EVENT_ESCAPE for one that reaches t_max), the vertex data of scattering events
     (position q and the per-medium σ_s at q) and each path's survival along its ray as a shadow ray would give it
-    (`_transmittance`; 1 where `r_l` has the null-event probabilities), for `_escape` and `_surface_emission`."""
+    (`_transmittance`; 1 where `r_l` has the null-event probabilities), for `_escape` and `_surface_emission`.
+
+    Without `collect` (sunward probes, `_probe`), nothing is collected or offered and no area light is looked for,
+    and no path integrates its controls."""
     count, n = paths.lams.shape
     vertex = _Batch(event=np.full(count, EVENT_ESCAPE, dtype=np.int8), q=np.zeros((count, 3)),
                     medium_s=np.zeros((count, ks.media.density_scale.shape[0], n)), survival=np.ones(count))
-    controls = paths.grey & paths.scattered
+    controls = paths.grey & paths.scattered & collect
     depth = np.zeros((count, ks.media.density_scale.shape[0]))  # the controls' integral along each ray so far
-    t_light, seen = _next_area_lights(ks, paths.o, paths.d, 0.0, -1, t_max)
+    t_light, seen = (_next_area_lights(ks, paths.o, paths.d, 0.0, -1, t_max) if collect
+                     else (np.full(count, INF), np.full(count, -1)))
 
     def pass_lights(rows, t):
         """Add the area lights that paths `rows` pass before t (as the Numba kernel's `_free_flight`)."""
@@ -559,14 +565,15 @@ def _free_flight(ks, paths, radiance, fl, t_max):
         depth[rays] += control * dt[:, None]
 
     def collide(rows, points, sigma_bar):
-        pass_lights(rows, np.sum((points - paths.o[rows]) * paths.d[rows], axis=1))
         c = _coefficients(ks, points, paths.lams[rows])
         beta, r_u, r_l = paths.beta[rows], paths.r_u[rows], paths.r_l[rows]
         bar = sigma_bar[:, None]
-        mean_r_u = _mean(r_u)
-        radiance[paths.id[rows]] += np.where(c.emission > 0.0,
-                                             collision_estimate(beta * c.emission, bar, mean_r_u[:, None]), 0.0)
-        _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl)
+        if collect:
+            pass_lights(rows, np.sum((points - paths.o[rows]) * paths.d[rows], axis=1))
+            mean_r_u = _mean(r_u)
+            radiance[paths.id[rows]] += np.where(c.emission > 0.0,
+                                                 collision_estimate(beta * c.emission, bar, mean_r_u[:, None]), 0.0)
+            _offer_fluorescence(ks, paths, rows, points, sigma_bar, mean_r_u, c, fl)
         choice = _draw(paths, rows) * sigma_bar
         # A real collision scatters, weighted by the albedo (as in the Numba kernel).
         collided = choice < c.sigma_a[:, 0] + c.sigma_s[:, 0]
@@ -585,9 +592,12 @@ def _free_flight(ks, paths, radiance, fl, t_max):
         vertex.q[keep], vertex.medium_s[keep] = points[scattered], c.medium_s[scattered]
         return stop
 
-    fl.tau[paths.id] = 0.0
+    if collect:
+        fl.tau[paths.id] = 0.0
     _track(ks, paths, np.arange(count), paths.o, paths.d, t_max, collide, controls=controls,
            travel=travel if controls.any() else None)
+    if not collect:
+        return vertex
     escaped = np.flatnonzero(vertex.event == EVENT_ESCAPE)
     pass_lights(escaped, np.full(escaped.size, INF))
     escaped = np.flatnonzero(controls & (vertex.event == EVENT_ESCAPE))
@@ -714,12 +724,19 @@ def _transmittance(ks, paths, rows, origins, directions, t_max, lams, residual):
     return transmittance, survival
 
 
-def _next_event(ks, paths, vertex, isotropic, radiance):
+def _next_event(ks, paths, vertex, isotropic, radiance, probing=False, held=None):
     """Next-event estimation from every vertex: one light chosen by its pmf, ratio-tracked
     transmittance (residual ratio tracking towards delta lights and on grey paths), MIS against phase
-    sampling (balance heuristic over wavelengths and strategies)."""
-    choice, u1, u2 = _draw(paths), _draw(paths), _draw(paths)
-    lights = choose_light(ks.lights.pmf, choice)
+    sampling (balance heuristic over wavelengths and strategies). The paths `weighted` weigh the sunward
+    probe's strategy into their sun's estimate (`weight`). Sunward probes at their collisions (`probing`, as
+    the Numba kernel's `_next_event`): the probe's sun, chosen with certainty (its estimate times the chance
+    the path's own choice gives it), their light also added to `held` (by path id) where it is given."""
+    if probing:
+        u1, u2 = _draw(paths), _draw(paths)
+        lights = np.full(len(paths), ks.lights.probe[0])
+    else:
+        choice, u1, u2 = _draw(paths), _draw(paths), _draw(paths)
+        lights = choose_light(ks.lights.pmf, choice)
     sample = _sample_lights(ks, lights, paths.o, u1, u2, paths.lams)
     cos_theta = (paths.d[:, 0] * sample.w[:, 0] + paths.d[:, 1] * sample.w[:, 1]
                  + paths.d[:, 2] * sample.w[:, 2])
@@ -736,14 +753,20 @@ def _next_event(ks, paths, vertex, isotropic, radiance):
         return
     transmittance, survival = _transmittance(ks, paths, rows, paths.o[rows], sample.w[rows], sample.distance[rows],
                                              paths.lams[rows], sample.delta[rows] | paths.grey[rows])
-    r_u, phase_values = paths.r_u[rows], phase_values[rows]
+    weighted = (paths.weighted[rows] & ~paths.on_surface[rows] & (lights[rows] == ks.lights.probe[0]))[:, None]
+    r_u = np.where(weighted, paths.r_u[rows] * paths.weight[rows], paths.r_u[rows])
+    phase_values = phase_values[rows]
     light_pdf = (ks.lights.pmf[lights[rows]] * sample.pdf[rows])[:, None]
     mean_r = _mean(light_sample_ratio(r_u, light_pdf, phase_values, survival, sample.delta[rows, None]))
     counted = mean_r > 0.0
     values = np.where(paths.on_surface[rows, None], phase_values * paths.reflectance[rows], phase_values)
     contribution = next_event_contribution(paths.beta[rows], values, transmittance, sample.radiance[rows],
                                            mean_r[:, None])
+    if probing:
+        contribution = ks.lights.pmf[lights[rows]][:, None] * contribution
     radiance[paths.id[rows[counted]]] += contribution[counted]
+    if held is not None:
+        held[paths.id[rows[counted]]] += contribution[counted]
 
 
 def _sample_phase(ks, paths, vertex, isotropic):
@@ -754,13 +777,7 @@ def _sample_phase(ks, paths, vertex, isotropic):
     new_cos = 1.0 - 2.0 * u1
     surface = paths.on_surface
     anisotropic = np.flatnonzero(~isotropic & ~surface)
-    medium = _pick_medium(vertex.medium_s[anisotropic, :, 0], _draw(paths, anisotropic))
-    for m in range(ks.media.density_scale.shape[0]):
-        rows = anisotropic[medium == m]
-        if ks.media.phase_kind[m] == PHASE_RAYLEIGH:
-            new_cos[rows] = rayleigh_sample_cos(u1[rows])
-        else:
-            new_cos[rows] = hg_sample_cos(table_at(ks.media.anisotropy, m, on_grid(paths.lams[rows, 0])), u1[rows])
+    new_cos[anisotropic] = _hero_phase_cos(ks, paths, anisotropic, vertex.medium_s[anisotropic], u1[anisotropic])
     new_cos[surface] = lambert_sample_cos(u1[surface])
     direction = _direction(np.where(surface[:, None], paths.normal, paths.d), new_cos, u2)
     phase_values = np.where(isotropic[:, None], INV_FOUR_PI,
@@ -772,7 +789,22 @@ def _sample_phase(ks, paths, vertex, isotropic):
     paths.beta, paths.r_u, paths.r_l = sampled
     paths.d = _rows(normalize(*_columns(direction)), len(paths))
     paths.scattered[:] = True
-    return pdf0[:, 0] > 0.0
+    return pdf0[:, 0] > 0.0, phase_values
+
+
+def _hero_phase_cos(ks, paths, rows, medium_s, u1):
+    """cos θ drawn from the hero's phase function for paths `rows` (their per-medium σ_s `medium_s`): a medium
+    drawn ∝ its σ_s at the hero wavelength, then its phase function (as the Numba kernel's `_phase_direction`)."""
+    new_cos = np.zeros(rows.size)
+    medium = _pick_medium(medium_s[:, :, 0], _draw(paths, rows))
+    for m in range(ks.media.density_scale.shape[0]):
+        mine = medium == m
+        if ks.media.phase_kind[m] == PHASE_RAYLEIGH:
+            new_cos[mine] = rayleigh_sample_cos(u1[mine])
+        else:
+            new_cos[mine] = hg_sample_cos(table_at(ks.media.anisotropy, m, on_grid(paths.lams[rows[mine], 0])),
+                                          u1[mine])
+    return new_cos
 
 
 def _roulette(ks, paths):
@@ -788,16 +820,64 @@ def _roulette(ks, paths):
 
 
 def _scatter(ks, paths, vertex, isotropic, radiance, marks=None):
-    """Next-event estimation and phase sampling at every path's vertex (isotropic where `isotropic`), then
-    Russian roulette; returns the paths still alive. With `marks` (camera paths, `_Marks`), the paths at their
-    first vertex take their mark after next-event estimation."""
+    """Next-event estimation and phase sampling at every path's vertex (isotropic where `isotropic`), the
+    sunward probes (`_probe`), then Russian roulette; returns the paths still alive. With `marks` (camera paths,
+    `_Marks`), the paths at their first vertex take their mark after next-event estimation."""
     if ks.lights.kind.shape[0] > 0:
         _next_event(ks, paths, vertex, isotropic, radiance)
+    paths.weighted[:] = False
     if marks is not None:
         marks.take(paths.id[marks.taken[paths.id] == AFTER_NEE], AFTER_NEE, radiance)
-    keep = _sample_phase(ks, paths, vertex, isotropic)
+    probing = (ks.lights.probe[0] >= 0) & ~isotropic & ~paths.on_surface & (paths.depth < ks.termination.max_depth)
+    start = paths.beta.copy(), paths.r_u.copy(), paths.d.copy()
+    keep, phase_values = _sample_phase(ks, paths, vertex, isotropic)
+    rows = np.flatnonzero(probing & keep)
+    if rows.size:
+        _probe(ks, paths, rows, vertex, start, phase_values, radiance, marks)
     paths = paths.take(keep)
     return paths.take(_roulette(ks, paths))
+
+
+def _probe(ks, paths, rows, vertex, start, phase_values, radiance, marks):
+    """The sunward probes (`probe_grid`, the Numba kernel's `_probe_from`) at the medium vertices of paths `rows`,
+    which have drawn their directions (their phase values there: `phase_values`; `start`: their β, r_u and
+    direction before the draw): where every wavelength scatters and the chance a(o) is positive, the factor of r_u
+    in the path's next sun estimate (`weight`); then, with probability a(o), a probe drawn about the sun, tracked
+    to its next real collision (nothing collected) and its sun estimate made there (also held for the marks)."""
+    medium_s = vertex.medium_s[rows]
+    chance = probe_chance(ks, *_columns(paths.o[rows]))
+    eligible = np.all(np.sum(medium_s, axis=1) > 0.0, axis=1) & (chance > 0.0)
+    rows, medium_s, chance = rows[eligible], medium_s[eligible], chance[eligible]
+    if not rows.size:
+        return
+    w = ks.lights.dir[ks.lights.probe[0]]
+    d = paths.d[rows]
+    sun_phase = _mixture_phase(ks, medium_s, paths.lams[rows], d[:, 0] * w[0] + d[:, 1] * w[1] + d[:, 2] * w[2])
+    paths.weight[rows] = probe_weight(phase_values[rows], chance[:, None], sun_phase)
+    paths.weighted[rows] = True
+    sent = _draw(paths, rows) < chance
+    rows, medium_s, chance = rows[sent], medium_s[sent], chance[sent]
+    if not rows.size:
+        return
+    u1, u2 = _draw(paths, rows), _draw(paths, rows)
+    sun_cos = _hero_phase_cos(ks, paths, rows, medium_s, u1)
+    p = _rows(normalize(*_columns(_direction(np.tile(w, (rows.size, 1)), sun_cos, u2))), rows.size)
+    sun_phase = _mixture_phase(ks, medium_s, paths.lams[rows], sun_cos)
+    beta, r_u, incoming = (value[rows] for value in start)
+    phase = _mixture_phase(ks, medium_s, paths.lams[rows],
+                           incoming[:, 0] * p[:, 0] + incoming[:, 1] * p[:, 1] + incoming[:, 2] * p[:, 2])
+    probes = paths.take(rows)
+    probes.beta, probes.r_u = probe_sampled(beta, r_u, phase, chance[:, None], sun_phase)
+    probes.r_l, probes.d, probes.weighted = probes.r_u.copy(), p, np.zeros(rows.size, dtype=bool)
+    t_hit, _ = _closest_hits(ks, probes.o, probes.d, INF)
+    found = _free_flight(ks, probes, radiance, None, t_hit, collect=False)
+    arrived = found.event == EVENT_SCATTER
+    if not arrived.any():
+        return
+    probes, found = probes.take(arrived), found.take(arrived)
+    probes.o = found.q
+    _next_event(ks, probes, found, np.zeros(len(probes), dtype=bool), radiance, probing=True,
+                held=None if marks is None else marks.held)
 
 
 class _Marks:
@@ -806,12 +886,14 @@ class _Marks:
 
     def __init__(self, count, n):
         self.values = np.zeros((count, MARKS, n))
+        self.held = np.zeros((count, n))  # what sunward probes brought before the second mark, which it leaves out
         self.taken = np.zeros(count, dtype=np.int64)
         self.first = np.zeros(count, dtype=np.int64)
 
     def take(self, ids, index, radiance):
-        """Paths `ids` take their mark `index`: their radiance now."""
-        self.values[ids, index] = radiance[ids]
+        """Paths `ids` take their mark `index`: their radiance now (the second: but for what probes from the first
+        vertex brought, light scattered at a second vertex, indirect; the Numba kernel's `_mark`)."""
+        self.values[ids, index] = radiance[ids] - self.held[ids] if index == SECOND else radiance[ids]
         self.taken[ids] = index + 1
 
     def at_vertex(self, paths, radiance):
@@ -826,7 +908,7 @@ class _Marks:
         """Marks a path never reached are its radiance."""
         for index in range(MARKS):
             ids = np.flatnonzero(self.taken <= index)
-            self.values[ids, index] = radiance[ids]
+            self.values[ids, index] = radiance[ids] - self.held[ids] if index == SECOND else radiance[ids]
         self.taken[:] = MARKS
 
     def add_fluorescence(self, ids, depth, contribution):
