@@ -10,13 +10,16 @@ weighed by the balance heuristic.
 
 The chance must be a function of the position alone (the MIS weights depend on it): a grid of
 `PROBE_CELLS`³ cells over the media's box, each cell's sun transmittance marched once through the density
-grids at the media's mean extinction over the visible range. Built once per scene by `lowering.compile_scene`;
-the kernels look it up (`kernels/lookups.probe_chance`). No sun, or no medium: no probe.
+grids at the media's mean extinction over the wavelength grid. Built once per scene by `lowering.compile_scene`;
+the kernels look it up (`kernels/lookups.probe_chance`). No sun, no medium, or no medium that scatters forward
+(Henyey–Greenstein g of at least `FORWARD_G` somewhere on the grid): no probe. Where the phase function has no
+peak the probe's directions are the path's own kind of sample, at a vertex's cost: on the isotropic sunlit
+scenes of `bench/vs_mitsuba.py` it gained nothing (efficiency 0.96–1.13×, bench/README.md).
 """
 
 import numpy as np
 
-from .kernels.layout import LIGHT_SUN, KernelScene
+from .kernels.layout import LIGHT_SUN, PHASE_RAYLEIGH, KernelScene
 from .kernels.media import attenuation, density
 from .kernels.geometry import transform_point
 
@@ -25,6 +28,7 @@ PROBE_CELLS = 32  # cells along each axis of the grid
 # alike (1.9× and 2.1×, bench/README.md "Denoise and a sunward probe"); 0.5 at half the cost.
 PROBE_STRENGTH = 0.5
 _STEPS_PER_CELL = 2  # the transmittance's march: steps per cell diagonal
+FORWARD_G = 0.3  # the least anisotropy that sends probes
 
 
 def no_probe() -> dict:
@@ -35,10 +39,11 @@ def no_probe() -> dict:
 
 def with_probe(ks: KernelScene) -> KernelScene:
     """`ks` with its probe: towards the sun chosen most often by next-event estimation, with the chance of a
-    probe in each cell of the media's box; `no_probe` without a sun or without a medium."""
+    probe in each cell of the media's box; `no_probe` without a sun or without a forward-scattering medium."""
     suns = np.flatnonzero(ks.lights.kind == LIGHT_SUN)
-    media = ks.media.density_scale.shape[0]
-    if suns.size == 0 or media == 0:
+    forward = [ks.media.phase_kind[m] != PHASE_RAYLEIGH and ks.media.anisotropy[m].max() >= FORWARD_G
+               for m in range(ks.media.density_scale.shape[0])]
+    if suns.size == 0 or not any(forward):
         return ks._replace(lights=ks.lights._replace(**no_probe()))
     sun = suns[np.argmax(ks.lights.pmf[suns])]
     lower, upper = _media_box(ks)

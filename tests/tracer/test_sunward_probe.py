@@ -9,7 +9,7 @@ import pytest
 from addon.tracer.kernels import numba_backend
 from addon.tracer.kernels.lookups import probe_chance
 from addon.tracer.lowering import compile_scene
-from addon.tracer.probe_grid import PROBE_STRENGTH
+from addon.tracer.probe_grid import FORWARD_G, PROBE_STRENGTH
 from addon.tracer.backends import tile_arguments
 from tests.support import scenes as s
 
@@ -17,8 +17,9 @@ EXTINCTION = 1.5
 
 
 def cube_under(towards, lights=()):
-    """A cube of constant density 1 (2 units wide around the origin, σ_t = EXTINCTION) under a sun from `towards`."""
-    medium = s.medium(s.box_grid(), extinction=EXTINCTION)
+    """A cube of constant density 1 (2 units wide around the origin, σ_t = EXTINCTION, HG g 0.8) under a sun from
+    `towards`."""
+    medium = s.medium(s.box_grid(), extinction=EXTINCTION, g=0.8)
     return s.scene(s.perspective_camera(4, 4), [medium], [s.sun(towards, 1.0), *lights])
 
 
@@ -49,11 +50,19 @@ def test_the_probe_aims_at_the_sun_chosen_most_often():
     assert ks.lights.pmf[1] > ks.lights.pmf[0]
 
 
-def test_no_probe_without_a_sun_or_without_a_medium():
-    without_sun = s.scene(s.perspective_camera(4, 4), [s.medium(s.box_grid())], [s.environment()])
-    without_medium = s.scene(s.perspective_camera(4, 4), [], [s.sun((0.0, 0.0, 1.0))])
-    for scene in (without_sun, without_medium):
+def test_no_probe_without_a_sun_or_a_medium_that_scatters_forward():
+    """No sun, no medium, or media whose phase functions have no forward peak (isotropic, backward, Rayleigh, HG g
+    below FORWARD_G at every wavelength): no probe. A medium forward at some wavelengths sends them."""
+    sun = s.sun((0.0, 0.0, 1.0))
+    without_sun = s.scene(s.perspective_camera(4, 4), [s.medium(s.box_grid(), g=0.8)], [s.environment()])
+    without_medium = s.scene(s.perspective_camera(4, 4), [], [sun])
+    flat = [s.medium(s.box_grid(), g=g, name=str(g)) for g in (0.0, -0.8, FORWARD_G - 0.01)]
+    rayleigh = s.medium(s.box_grid(), phase="rayleigh", name="air")
+    without_peak = s.scene(s.perspective_camera(4, 4), [*flat[:3], rayleigh], [sun])
+    for scene in (without_sun, without_medium, without_peak):
         assert compile_scene(scene).lights.probe[0] == -1
+    partly = s.medium(s.box_grid(), g=s.smooth_ramp(0.0, FORWARD_G), name="partly")
+    assert compile_scene(s.scene(s.perspective_camera(4, 4), [flat[0], partly], [sun])).lights.probe[0] == 0
 
 
 # ----------------------------------------------------------------------------- the kernel with and without probes

@@ -21,6 +21,9 @@ Algorithm (shared with `numpy_backend`; see docs/algorithm.md):
   ratio tracking towards delta lights and on grey paths), combined with phase sampling by MIS for
   environment, sky, envmaps, finite suns and area lights (on grey paths weighed by the controls' transmittance,
   `_is_grey`). A free flight adds the area lights whose emitting faces it passes (`_area_light_seen`).
+- Under a sun, in a forward-scattering medium: sunward probes (`_probe_from`, chance from `probe_grid`), an extra
+  direction drawn about the sun's at a medium vertex, tracked to its next collision for the sun's estimate there,
+  weighed against the path's own phase sampling by the balance heuristic.
 - Thermal emission σ_a·Planck(T) and glow (emission that does not depend on absorption) are collected at every
   tentative collision.
 - Surfaces (opaque Lambertian triangles, some emissive) end free flights: the closest hit along a ray

@@ -4,10 +4,10 @@ It runs the algorithm of `numba_backend` (see its docstring) with no compiled de
 second engine that validates the Numba kernel. Paths are not traced one at a time: the paths of a tile
 (in chunks of at most `CHUNK_PATHS`) are arrays of path states (`_Batch`, one row per path) that step
 together and are compacted as they end. One `_bounce` takes every live path through free flight, escape,
-the scattering or fluorescent vertex, next-event estimation, phase sampling and Russian roulette. The
-physics at each point and the estimator's per-wavelength updates are the arithmetic the Numba kernel compiles
-(look-ups, coefficients, phase functions, lights, free paths; `estimator`: weights, MIS ratios, contributions,
-roulettes: docs/algorithm.md), called here on arrays of paths; this module holds the wavefront's loops, masks and
+the scattering or fluorescent vertex, next-event estimation, phase sampling, the sunward probes (`_probe`) and
+Russian roulette. The physics at each point and the estimator's per-wavelength updates are the arithmetic the
+Numba kernel compiles (look-ups, coefficients, phase functions, lights, free paths; `estimator`: weights, MIS
+ratios, contributions, roulettes: docs/algorithm.md), called here on arrays of paths; this module holds the wavefront's loops, masks and
 state, and one tracking loop, `_track`, for free flights and shadow rays (as the Numba kernel has one).
 
 Surfaces: every ray is tested against every triangle (`_closest_hits`, brute force over chunks of triangles,

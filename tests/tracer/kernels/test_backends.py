@@ -80,11 +80,11 @@ def heterogeneous():
 
 
 def fluorescence():
-    """A scattering slab with a UV-excited fluorophore under a UV environment and a weak visible sun, keeping the
-    spectral image (the default bins)."""
+    """A forward-scattering slab with a UV-excited fluorophore under a UV environment and a weak visible sun, keeping
+    the spectral image (the default bins): the camera paths and the fluorescent sub-paths send sunward probes."""
     slab = s.box_grid(cells=(16, 16, 4), size=(6.0, 6.0, 0.4))
     fluorophore = Fluorescence(spectra.window(spectra.constant(3.0), 300, 340), spectra.gaussian(550, 20), 0.8)
-    medium = s.medium(slab, extinction=0.5, albedo=0.9, g=0.2, fluorescence=fluorophore)
+    medium = s.medium(slab, extinction=0.5, albedo=0.9, g=0.5, fluorescence=fluorophore)
     uv = Light(kind="environment", spectrum=spectra.window(spectra.constant(1.0), 280, 350), strength=580.0,
                unit="radiant")  # 580 W·m⁻²·sr⁻¹: the radiance of the old rule for a strength-1 UV light
     return s.scene(s.ortho_camera(8, 8, scale=2.0), [medium], [uv, s.sun([0, 0.3, 1], 0.3)], spectrum=True)
