@@ -7,8 +7,9 @@ together and are compacted as they end. One `_bounce` takes every live path thro
 the scattering or fluorescent vertex, next-event estimation, phase sampling, the sunward probes (`_probe`) and
 Russian roulette. The physics at each point and the estimator's per-wavelength updates are the arithmetic the
 Numba kernel compiles (look-ups, coefficients, phase functions, lights, free paths; `estimator`: weights, MIS
-ratios, contributions, roulettes: docs/algorithm.md), called here on arrays of paths; this module holds the wavefront's loops, masks and
-state, and one tracking loop, `_track`, for free flights and shadow rays (as the Numba kernel has one).
+ratios, contributions, roulettes: docs/algorithm.md), called here on arrays of paths; this module holds the
+wavefront's loops, masks and state, and one tracking loop, `_track`, for free flights and shadow rays (as the Numba
+kernel has one).
 
 Surfaces: every ray is tested against every triangle (`_closest_hits`, brute force over chunks of triangles,
 the independent check of the Numba kernel's hierarchy); a path's free flight ends at the nearest one, where it
