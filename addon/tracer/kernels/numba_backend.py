@@ -138,8 +138,8 @@ SPEC_ROWS = 7
 # vertex before it drew its direction; its β, r_u and r_l while a probe is traced; the factor of r_u in its next
 # sun estimate (`estimator.probe_weight`); the probe's pdf at a direction; and the light a probe from the camera
 # path's first vertex brought, which counts as indirect (`_mark`).
-START_BETA, START_R_U, SAVED_BETA, SAVED_R_U, SAVED_R_L, WEIGHT, SUN_PHASE, HELD = range(8)
-PROBE_ROWS = 8
+START_BETA, START_R_U, SAVED_BETA, SAVED_R_U, SAVED_R_L, WEIGHT, SUN_PHASE, HELD, BACK = range(9)
+PROBE_ROWS = 10  # BACK and the row after it: the path's vertex and direction while a probe is traced
 
 
 # ----------------------------------------------------------------------------- small helpers
@@ -1247,7 +1247,7 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, ver
 
     A sunward probe (`_probe_from`) is a detour through the same stages: from its vertex o the probe's segment is
     tracked to its next real collision, where its sun estimate is made, and the path goes on from o along its own
-    direction (kept in `back`), its weights restored (`_end_probe`)."""
+    direction (kept in `path.probe`'s `BACK` rows), its weights restored (`_end_probe`)."""
     grey = _is_grey(ks, n, path.spec)
     probes = ks.lights.probe[0] >= 0
     scattered = emitted
@@ -1256,7 +1256,6 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, ver
     probing = False  # on a probe's segment; `arrived`: it found its collision
     arrived = False
     weighted = False  # the next sun estimate weighs the probe's strategy in (the path left a probing vertex)
-    back = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # the path's vertex and direction while a probe is traced
     while True:
         if at_vertex:
             if marking and not probing:
@@ -1266,7 +1265,9 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, ver
                             hit, probing, weighted and not on_surface and not probing,
                             probing and marking)
             if probing:
-                ox, oy, oz, dx, dy, dz = back
+                back = path.probe
+                ox, oy, oz = back[BACK, 0], back[BACK, 1], back[BACK, 2]
+                dx, dy, dz = back[BACK + 1, 0], back[BACK + 1, 1], back[BACK + 1, 2]
                 _end_probe(n, path)
                 probing, arrived = False, False
             else:
@@ -1290,7 +1291,9 @@ def _transport(ks, ox, oy, oz, dx, dy, dz, depth, emitted, marking, n, path, ver
                     weighted, px, py, pz = _probe_from(ks, ox, oy, oz, ix, iy, iz, dx, dy, dz, n, path, vertex, light)
                     if px != 0.0 or py != 0.0 or pz != 0.0:
                         probing = True
-                        back = (ox, oy, oz, dx, dy, dz)
+                        back = path.probe
+                        back[BACK, 0], back[BACK, 1], back[BACK, 2] = ox, oy, oz
+                        back[BACK + 1, 0], back[BACK + 1, 1], back[BACK + 1, 2] = dx, dy, dz
                         dx, dy, dz = px, py, pz
             if not probing and not _survives_roulette(ks, depth, n, path):
                 return
