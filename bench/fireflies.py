@@ -26,7 +26,12 @@ D65 sun and a faint sky (`--sky`, radiance Y; the benchmark's sky is 0.5).
    its own clamped reference (noise alone), with the z figures of part 1 and the mean Y the clamp takes away.
    `--clamping` runs this part alone.
 
-Nothing is asserted. python -m bench.fireflies [--quick] [--clamping]
+4. The firefly filter (`addon/tracer/fireflies.py`, docs/algorithm.md): the z figures of part 1 at 16 spp over
+   `--seeds` images for firefly_threshold off, 1, 2 and 3, with the mean Y it takes at 16, 64 and 256 spp (one
+   image each, against the reference's), and the render time with and without it (its passes run one sample at a
+   time) at this size and at 4× the width and height. `--filter` runs this part alone.
+
+Nothing is asserted. python -m bench.fireflies [--quick] [--clamping] [--filter]
 """
 
 import dataclasses
@@ -59,6 +64,7 @@ def parse(argv=None):
     parser.add_argument("--k", type=float, default=5.0, help="z above which a pixel counts as an outlier")
     parser.add_argument("--max-depth", type=int, default=64)
     parser.add_argument("--clamping", action="store_true", help="part 3 only")
+    parser.add_argument("--filter", action="store_true", help="part 4 only")
     args = parser.parse_args(argv)
     if args.quick:
         args.reference_spp, args.seeds, args.depths = 256, 2, [8]
@@ -315,16 +321,60 @@ def part_clamping(args):
         print(f"{label:26} {rmse:16.4f} {rmse_own:10.4f} {lost:11.2%}   {'':16}{describe(z)}", flush=True)
 
 
+def filtering(scene, threshold):
+    return dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, firefly_threshold=threshold))
+
+
+def seconds_to_render(scene, spp):
+    """The median of three renders' wall-clock seconds."""
+    times = []
+    for _ in range(3):
+        start = time.perf_counter()
+        render(scene, spp=spp, seed=7)
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def part_filter(args):
+    scene = cloud_preset_scene(args, args.max_depth)
+    reference, sigma = luminance_and_sigma(render(scene, spp=args.reference_spp, seed=REFERENCE_SEED).film)
+    sigma_16 = np.maximum(sigma / np.sqrt(16), 1e-12)
+    print(f"\n4. The firefly filter: z of {args.seeds} 16-spp images against the unfiltered {args.reference_spp}-spp "
+          f"reference; mean Y taken at 16, 64, 256 spp (seed 7); wall-clock s per render (median of 3)")
+    print(f"{'firefly_threshold':18} {'p50':>6} {'p90':>6} {'p99':>6} {'max':>8}  {'>3':>7} {'>5':>7} {'>10':>7}  "
+          f"{'taken 16':>8} {'64':>7} {'256':>7}")
+    for threshold in (0.0, 1.0, 2.0, 3.0):
+        version = filtering(scene, threshold)
+        images = np.stack([render(version, spp=16, seed=seed).film.xyz[..., 1] for seed in range(1, args.seeds + 1)])
+        z = np.abs(images - reference) / sigma_16
+        taken = [1.0 - render(version, spp=spp, seed=7).film.xyz[..., 1].mean() / reference.mean()
+                 for spp in (16, 64, 256)]
+        label = "off" if threshold == 0.0 else f"{threshold:g}"
+        print(f"{label:18} {describe(z)}  {taken[0]:8.2%} {taken[1]:7.2%} {taken[2]:7.2%}", flush=True)
+    for scale in (1, 4):
+        sized = argparse.Namespace(**{**vars(args), "width": args.width * scale, "height": args.height * scale})
+        plain = cloud_preset_scene(sized, args.max_depth)
+        for spp in (16, 256) if scale == 1 else (16,):
+            off, on = seconds_to_render(plain, spp), seconds_to_render(filtering(plain, 2.0), spp)
+            print(f"   {sized.width}×{sized.height}, {spp} spp: {off:.2f} s without the filter, {on:.2f} s with it "
+                  f"({on / off:.2f}×)", flush=True)
+
+
 def main(argv=None) -> None:
     args = parse(argv)
     print(machine())
     print(f"Cloud preset optics (σ_t 20 × density, albedo 0.99, g 0.8) on the benchmark cloud 64³, D65 sun "
           f"(irradiance Y 3), sky Y {args.sky:g}, {args.width}×{args.height}")
     render(cloud_preset_scene(args, args.max_depth), spp=1)  # compile or load the kernel, untimed
+    if args.filter:
+        part_filter(args)
+        return
     if not args.clamping:
         found = part_numba(args)
         part_oracle(args, found)
     part_clamping(args)
+    if not args.clamping:
+        part_filter(args)
 
 
 if __name__ == "__main__":

@@ -78,6 +78,10 @@ class EmulationJob(Job):
             export = dataclasses.replace(export, warnings=[
                 *export.warnings, f"the Cycles emulation does not clamp: Light Paths ▸ Clamping (Direct "
                 f"{tracer_settings.clamp_direct:g}, Indirect {tracer_settings.clamp_indirect:g}) left out of the render"])
+        if tracer_settings.firefly_threshold > 0:
+            export = dataclasses.replace(export, warnings=[
+                *export.warnings, "the Cycles emulation does not filter fireflies: Light Paths ▸ Clamping ▸ Firefly "
+                "Filter left out of the render"])
         return cls(scene, export.scene, export.warnings, band_count=band_count,
                    max_renders=settings.emulation_max_renders, shader=settings.emulation_shader, spp=spp)
 

@@ -68,7 +68,8 @@ def render_settings(scene) -> RenderSettings:
                           lambda_min=s.lambda_min, lambda_max=s.lambda_max, bands=s.bands, cmf=s.cmf,
                           backend=chosen_backend(s), noise_threshold=s.adaptive_threshold if s.use_adaptive_sampling else 0.0,
                           min_samples=s.adaptive_min_samples, transparent=bool(scene.render.film_transparent),
-                          clamp_direct=s.clamp_direct, clamp_indirect=s.clamp_indirect)
+                          clamp_direct=s.clamp_direct, clamp_indirect=s.clamp_indirect,
+                          firefly_threshold=s.firefly_threshold if s.use_firefly_filter else 0.0)
 
 
 def unsupported_settings(scene) -> list[str]:

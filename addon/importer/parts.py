@@ -41,6 +41,9 @@ def new_scene(name: str, width: int, height: int, settings: RenderSettings):
         ours.adaptive_threshold = settings.noise_threshold
     ours.adaptive_min_samples = settings.min_samples
     ours.clamp_direct, ours.clamp_indirect = settings.clamp_direct, settings.clamp_indirect
+    ours.use_firefly_filter = settings.firefly_threshold > 0
+    if settings.firefly_threshold > 0:
+        ours.firefly_threshold = settings.firefly_threshold
     scene.render.film_transparent = settings.transparent
     scene.frame_start = scene.frame_end = scene.frame_current = 1
     return scene

@@ -59,6 +59,16 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
         description="Largest light a sample may bring after its first bounce (mean of linear R, G and B), as "
                     "Cycles clamps it: brighter samples are scaled down, which removes fireflies but darkens the "
                     "image. 0: no clamping")
+    # Light Paths ▸ Clamping ▸ Firefly Filter (the scene file's default is 0: off)
+    use_firefly_filter: bpy.props.BoolProperty(
+        name="Firefly Filter", default=True,
+        description="Scale down each pixel's brightest sample where it stands out from its neighbours' samples (a "
+                    "rare path that alone would make a speck): removes the fireflies of a few samples; it darkens "
+                    "the image a little at low sample counts and less as they grow")
+    firefly_threshold: bpy.props.FloatProperty(
+        name="Firefly Threshold", default=2.0, min=0.01, soft_max=10.0, precision=2, step=10,
+        description="How far above its neighbours a sample may be, in their standard errors (lower: fewer "
+                    "fireflies, a darker image at low sample counts)")
     bands: bpy.props.IntProperty(name="Bands", description="Render the wavelength range in this many passes",
                                  default=DEFAULTS.bands, min=1, soft_max=64)
     wavelength_sampling: bpy.props.EnumProperty(

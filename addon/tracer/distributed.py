@@ -30,23 +30,25 @@ PACKAGES = ("numpy", "numba", "llvmlite")  # their versions must match between c
 
 class SceneData:
     """What is scattered to the workers: the kernel scene of each band, and what every task accumulates besides
-    XYZ: how many light categories (`light_passes.light_categories`; 0 for none) and whether the spectral bins.
+    XYZ: how many light categories (`light_passes.light_categories`; 0 for none), whether the spectral bins, and
+    whether each pixel's brightest sample (`fireflies.Peaks`, for the firefly filter).
 
     One picklable object rather than a list, so that pickling keeps the arrays the bands share
     (grids, majorants, light spectra) once instead of once per band. `digest()` hashes this copy (once per
     process: it is not pickled, so a worker hashes the copy it received)."""
 
-    def __init__(self, band_scenes, light_categories: int = 0, spectrum: bool = False):
+    def __init__(self, band_scenes, light_categories: int = 0, spectrum: bool = False, peaks: bool = False):
         self.band_scenes = tuple(band_scenes)
-        self.light_categories, self.spectrum = int(light_categories), bool(spectrum)
+        self.light_categories, self.spectrum, self.peaks = int(light_categories), bool(spectrum), bool(peaks)
 
     def __getstate__(self):
-        return {"band_scenes": self.band_scenes, "light_categories": self.light_categories, "spectrum": self.spectrum}
+        return {"band_scenes": self.band_scenes, "light_categories": self.light_categories, "spectrum": self.spectrum,
+                "peaks": self.peaks}
 
     def digest(self) -> str:
         if getattr(self, "_digest", None) is None:
             hasher = hashlib.blake2b(digest_size=32)
-            _hash_value((self.band_scenes, self.light_categories, self.spectrum), hasher, {})
+            _hash_value((self.band_scenes, self.light_categories, self.spectrum, self.peaks), hasher, {})
             self._digest = hasher.hexdigest()
         return self._digest
 
@@ -96,7 +98,7 @@ def render_task(scene_data: SceneData, band: int, samples: tuple[int, int], tile
     backends.named(backend).kernels.set_threads(threads or _threads_per_task())
     return TaskResult(ran, _worker_address(), render.render_unit(scene_data.band_scenes[band], band, samples, tile,
                                                                  seed, backend, scene_data.light_categories,
-                                                                 scene_data.spectrum))
+                                                                 scene_data.spectrum, scene_data.peaks))
 
 
 def _worker_address() -> str:

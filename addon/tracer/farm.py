@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from . import checks
 from . import distributed as worker
 from .errors import SpectralError
+from .fireflies import filtered
 from .farm_plan import PassMerger, Unit, plan
 from .film import Film
 from .light_passes import light_categories, light_images
@@ -252,7 +253,7 @@ class RenderFarm:
         threads = self._threads_per_task(threads)
         self.wait_for_workers()
         self.check_environment()
-        scene_data = worker.SceneData(job.bands, job.film.light_categories, job.film.bins > 0)
+        scene_data = worker.SceneData(job.bands, job.film.light_categories, job.film.bins > 0, bool(job.film.peaks))
         expected = worker.fingerprint(worker.environment(), scene_data.digest(), job.seed, job.backend)
         [scene_future] = self.client.scatter([scene_data], broadcast=True, hash=False)
         setup_seconds = time.perf_counter() - start
@@ -272,6 +273,8 @@ class RenderFarm:
             raise SpectralError("internal error: every task completed but the film is missing passes")
         # The data passes need no farm: the first hits of the camera rays, on this computer (`first_hit_passes`).
         passes = None if cancelled else first_hit_passes(scene, job.bands[0], job.spp, job.seed, job.backend, cancel)
+        if job.film.peaks:
+            job.merger.film = filtered(job.film, scene.settings.firefly_threshold)
         result = self._result(job, tasks, time.perf_counter() - start, setup_seconds, passes is None)
         if passes is None:
             return result
@@ -371,9 +374,10 @@ class _Job:
         check_settings(dataclasses.replace(settings, spp=spp, seed=seed, backend=backend))
         bands = band_scenes(scene)
         camera = scene.camera
-        sizes, tiles, units = plan(camera.width, camera.height, len(bands), spp, int(tile_size))
+        peaks = settings.firefly_threshold > 0
+        sizes, tiles, units = plan(camera.width, camera.height, len(bands), spp, int(tile_size), one_sample=peaks)
         film = Film(camera.width, camera.height, len(bands), light_categories(settings),
-                    bands[0].wavelengths.spectrum_edges)
+                    bands[0].wavelengths.spectrum_edges, keep_peaks=peaks)
         merger = PassMerger(film, sizes, tiles)
         return cls(spp, seed, backend, int(tile_size), bands, units, merger)
 

@@ -38,9 +38,11 @@ def image_tiles(width: int, height: int, tile_size: int) -> list[tuple[int, int,
             for y0 in range(0, height, tile_size) for x0 in range(0, width, tile_size)]
 
 
-def plan(width: int, height: int, bands: int, spp: int, tile_size: int) -> tuple[list[int], list, list[Unit]]:
-    """(pass sizes, tiles, units): the single-process render's passes × bands × tiles, in pass order."""
-    sizes = pass_sizes(spp)
+def plan(width: int, height: int, bands: int, spp: int, tile_size: int,
+         one_sample: bool = False) -> tuple[list[int], list, list[Unit]]:
+    """(pass sizes, tiles, units): the single-process render's passes × bands × tiles, in pass order (with
+    `one_sample`, as the single-process render for the firefly filter: passes of one sample)."""
+    sizes = [1] * spp if one_sample else pass_sizes(spp)
     tiles = image_tiles(width, height, tile_size)
     units, begin = [], 0
     for pass_index, size in enumerate(sizes):
@@ -66,13 +68,13 @@ class PassMerger:
         self.waiting: dict[tuple[int, int], dict[int, tuple[np.ndarray, ...]]] = {}
 
     def add(self, unit: Unit, sum_xyz: np.ndarray, sum_sq: np.ndarray, sum_transparent: np.ndarray,
-            sum_light: np.ndarray | None = None, sum_spectrum: np.ndarray | None = None) -> None:
+            sum_light: np.ndarray | None = None, sum_spectrum: np.ndarray | None = None, peaks=None) -> None:
         """Add a unit's accumulators (`render.render_unit`'s: the light categories' and the spectral bins' where
-        the film has them)."""
+        the film has them, and the brightest samples where it keeps them)."""
         if unit.pass_index < self.next_pass[unit.band]:
             raise ValueError(f"pass {unit.pass_index} of band {unit.band} was already added")
         arrived = self.waiting.setdefault((unit.band, unit.pass_index), {})
-        arrived[unit.tile_index] = (sum_xyz, sum_sq, sum_transparent, sum_light, sum_spectrum)
+        arrived[unit.tile_index] = (sum_xyz, sum_sq, sum_transparent, sum_light, sum_spectrum, peaks)
         band = unit.band
         while self.next_pass[band] < len(self.sizes):
             parts = self.waiting.get((band, self.next_pass[band]))
@@ -81,9 +83,9 @@ class PassMerger:
             del self.waiting[(band, self.next_pass[band])]
             for tile_index in sorted(parts):
                 x0, y0, _, _ = self.tiles[tile_index]
-                xyz, squares, transparent, light, spectrum = parts[tile_index]
+                xyz, squares, transparent, light, spectrum, peaks = parts[tile_index]
                 self.film.add(band, y0, x0, xyz, squares, self.sizes[self.next_pass[band]], transparent, light,
-                              spectrum)
+                              spectrum, peaks)
             self.next_pass[band] += 1
 
     @property

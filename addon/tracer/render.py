@@ -21,6 +21,7 @@ from .backends import tile_arguments
 from .light_passes import light_categories, light_images
 from .passes import DATA_PASSES, PassImages, render_passes
 from .errors import SpectralError
+from .fireflies import Peaks, filtered
 from .film import Film
 from .kernels.layout import KernelScene
 from .lowering import compile_scene
@@ -41,14 +42,30 @@ def band_scenes(scene: Scene, kernel_scene: KernelScene | None = None) -> list[K
 
 def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], tile: tuple[int, int, int, int],
                 seed: int, backend: str = "numba", light_categories: int = 0,
-                spectrum: bool = False) -> tuple[np.ndarray, ...]:
+                spectrum: bool = False, peaks: bool = False) -> tuple:
     """Σ XYZ, Σ XYZ² and Σ transparency over samples [begin, end) of each pixel in tile (x0, y0, width,
     height), then Σ XYZ of each of `light_categories` light categories (`light_passes.light_categories`; none
     when 0) and, with `spectrum`, the Σ of each spectral bin's estimate (height, width, bins; the scene's bins,
-    `kernel_scene.wavelengths.spectrum_edges`; none without)."""
-    arguments = tile_arguments(kernel_scene, band, samples, tile, seed, light_categories, spectrum)
-    backends.named(backend).kernels.render_tile(*arguments)
-    return arguments[-5:]
+    `kernel_scene.wavelengths.spectrum_edges`; none without). With `peaks`, a sixth: each pixel's brightest
+    sample (`fireflies.Peaks`), the samples then run one at a time (the sums are the same)."""
+    kernels = backends.named(backend).kernels
+    if not peaks:
+        arguments = tile_arguments(kernel_scene, band, samples, tile, seed, light_categories, spectrum)
+        kernels.render_tile(*arguments)
+        return arguments[-5:]
+    sums, brightest = None, None
+    for sample in range(*samples):
+        arguments = tile_arguments(kernel_scene, band, (sample, sample + 1), tile, seed, light_categories, spectrum)
+        kernels.render_tile(*arguments)
+        one = arguments[-5:]
+        if sums is None:
+            sums = tuple(part.copy() for part in one)
+            brightest = Peaks.none(*one[0].shape[:2], light_categories, one[4].shape[-1])
+        else:
+            for total, part in zip(sums, one):
+                total += part
+        brightest.keep(one[0], one[3], one[4])
+    return (*sums, brightest)
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
@@ -179,19 +196,23 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     bands = band_scenes(scene)
     camera = scene.camera
     categories = light_categories(settings)
-    film = Film(camera.width, camera.height, len(bands), categories, bands[0].wavelengths.spectrum_edges)
+    filter_fireflies = settings.firefly_threshold > 0
+    film = Film(camera.width, camera.height, len(bands), categories, bands[0].wavelengths.spectrum_edges,
+                keep_peaks=filter_fireflies)
     total = camera.width * camera.height * spp * len(bands)
     done = 0
     cancelled = not chosen.prepare(bands[0], seed, cancel, notice)
     tiler = Tiler(camera.width, camera.height, unit_seconds)
     adaptive_state = Adaptive(settings, spp, film)
-    for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler, adaptive_state):
+    for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler, adaptive_state,
+                                                                     filter_fireflies):
         if cancel is not None and cancel():
             cancelled = True
             break
         with KERNEL_LAUNCH:
             unit_start = time.perf_counter()
-            sums = render_unit(bands[band], band, samples, tile, seed, backend, categories, film.bins > 0)
+            sums = render_unit(bands[band], band, samples, tile, seed, backend, categories, film.bins > 0,
+                               filter_fireflies)
             unit_seconds_taken = time.perf_counter() - unit_start
         size = samples[1] - samples[0]
         tiler.measured(tile, size, unit_seconds_taken)
@@ -199,6 +220,8 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
         done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)
+    if filter_fireflies:
+        film = filtered(film, settings.firefly_threshold)
     data_passes = None if cancelled else first_hit_passes(scene, bands[0], spp, seed, backend, cancel, notice)
     cancelled = data_passes is None
     data_passes = data_passes or PassImages({}, {})
@@ -225,16 +248,20 @@ class Adaptive:
         return active
 
 
-def _units(spp: int, bands: int, tiler: Tiler, adaptive_state: Adaptive | None = None):
+def _units(spp: int, bands: int, tiler: Tiler, adaptive_state: Adaptive | None = None, one_sample: bool = False):
     """(band, sample range, tile) of each unit: passes in order, each band's pass tile by tile (with adaptive
-    sampling, only the pixels still active when the pass begins)."""
+    sampling, only the pixels still active when the pass begins). With `one_sample` (the firefly filter's, which
+    sees samples one by one), a pass runs sample by sample, over tiles as large as a unit of one sample may be:
+    as many kernel calls as samples, each as large as without."""
     for begin, size in passes(spp):
         active = None if adaptive_state is None else adaptive_state.active(begin, size)
         if active is not None and not active.any():
             continue  # every pixel is done: the remaining passes are skipped
         for band in range(bands):
-            for tile in tiler.tiles(size, active):
-                yield band, (begin, begin + size), tile
+            for first, count in ((sample, 1) for sample in range(begin, begin + size)) if one_sample else \
+                    ((begin, size),):
+                for tile in tiler.tiles(count, active):
+                    yield band, (first, first + count), tile
 
 
 def render_stats(film: Film, seconds: float, backend: str) -> dict:

@@ -384,7 +384,7 @@ def check_settings(settings: RenderSettings, where: str = "render") -> None:
                   0.0, 1.0)
     checks.whole_within(settings.min_samples, f"{where}.min_samples", 0)
     _check_boolean(settings.transparent, f"{where}.transparent")
-    for key in ("clamp_direct", "clamp_indirect"):
+    for key in ("clamp_direct", "clamp_indirect", "firefly_threshold"):
         checks.within(checks.number(getattr(settings, key), f"{where}.{key}"), f"{where}.{key}", 0.0)
     from .passes import check_passes  # the passes' rules, where they are made
 

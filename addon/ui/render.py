@@ -148,6 +148,11 @@ class SPECTRAL_PT_render_clamping(RenderPanel, bpy.types.Panel):
         column = layout.column(align=True)
         column.prop(settings, "clamp_direct")
         column.prop(settings, "clamp_indirect")
+        row = layout.row(heading="Firefly Filter", align=True)
+        row.prop(settings, "use_firefly_filter", text="")
+        threshold = row.row()
+        threshold.active = settings.use_firefly_filter
+        threshold.prop(settings, "firefly_threshold", text="")
 
 
 class SPECTRAL_PT_object(SpectralPanel, bpy.types.Panel):

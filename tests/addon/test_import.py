@@ -124,6 +124,18 @@ def test_a_scene_files_adaptive_sampling_is_imported(registered, tmp_path):
     assert adaptive.spectral.adaptive_min_samples == 8
 
 
+def test_a_scene_files_firefly_filter_is_imported(registered):
+    """Off where the file has none (its default, unbiased), on at the file's threshold where it has one."""
+    import dataclasses
+
+    from addon.importer.parts import new_scene
+    from addon.tracer.scene import RenderSettings
+
+    assert not new_scene("Unfiltered", 8, 8, RenderSettings()).spectral.use_firefly_filter
+    filtered = new_scene("Filtered", 8, 8, dataclasses.replace(RenderSettings(), firefly_threshold=3.5)).spectral
+    assert filtered.use_firefly_filter and filtered.firefly_threshold == pytest.approx(3.5)
+
+
 def test_a_scene_files_film_transparent_is_imported(registered):
     import dataclasses
 

@@ -126,18 +126,33 @@ def test_clamping_settings_have_cycles_defaults_and_are_exported(registered):
     assert (RenderSettings().clamp_direct, RenderSettings().clamp_indirect) == (0.0, 0.0)
     context = SimpleNamespace(scene=scene, engine=scene.render.engine)
     drawn = {args[1] for kind, args, _ in draw(bpy.types.SPECTRAL_PT_render_clamping, context).calls if kind == "prop"}
-    assert drawn == {"clamp_direct", "clamp_indirect"}
+    assert drawn == {"clamp_direct", "clamp_indirect", "use_firefly_filter", "firefly_threshold"}
+
+
+def test_the_firefly_filter_is_on_at_2_in_blender_and_exported(registered):
+    """Light Paths ▸ Clamping ▸ Firefly Filter: on at 2 in a new scene (F12's clean image at a few samples), exported
+    as the scene's firefly_threshold, 0 when off; the tracer's scene file defaults to off."""
+    from addon.tracer.scene import RenderSettings
+
+    scene, _ = volume_scene()
+    assert scene.spectral.use_firefly_filter and scene.spectral.firefly_threshold == 2.0
+    assert export_scene(bpy.context.evaluated_depsgraph_get()).scene.settings.firefly_threshold == 2.0
+    scene.spectral.use_firefly_filter = False
+    assert export_scene(bpy.context.evaluated_depsgraph_get()).scene.settings.firefly_threshold == 0.0
+    assert RenderSettings().firefly_threshold == 0.0
 
 
 def test_the_cycles_emulation_names_the_clamping_it_leaves_out(registered):
-    """The emulation renders Cycles unclamped (Cycles' clamp would treat each render's three bands as R, G, B): with
-    clamping set, its warning says so; without, nothing."""
+    """The emulation renders Cycles unclamped (Cycles' clamp would treat each render's three bands as R, G, B) and
+    without the engine's firefly filter: with either set, its warning says so; without, nothing."""
     from addon.jobs.kinds import render_job
 
     scene, _ = volume_scene()
     scene.spectral.renderer = "CYCLES"
     job = render_job(scene, export_scene(bpy.context.evaluated_depsgraph_get()))
     assert any("does not clamp" in w and "Indirect 10" in w for w in job.warnings), job.warnings
+    assert any("does not filter fireflies" in w for w in job.warnings), job.warnings
     scene.spectral.clamp_indirect = 0.0
+    scene.spectral.use_firefly_filter = False
     job = render_job(scene, export_scene(bpy.context.evaluated_depsgraph_get()))
-    assert not any("does not clamp" in w for w in job.warnings)
+    assert not any("does not clamp" in w or "fireflies" in w for w in job.warnings)

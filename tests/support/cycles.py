@@ -2,11 +2,13 @@
 module) and by the tracer through the add-on's export, compared on block means.
 
 Cycles renders as the Cycles emulation sets it up (its biased volume mode and light threshold off, a 1-pixel box
-filter), clamping as the engine's Light Paths ▸ Clamping says (Blender's defaults on both sides), with its volume
-bounces raised to the tracer's depth (its default, 0, is single scattering), denoising off, and its linear
-Rec.709 read from an EXR; the tracer's film gives linear Rec.709 and per-pixel variances. Block differences are
-judged against both estimates' noise: Cycles' from two renders with different seeds."""
+filter), clamping as the engine's Light Paths ▸ Clamping says (Blender's defaults on both sides; the engine's
+firefly filter, which Cycles lacks, off), with its volume bounces raised to the tracer's depth (its default, 0, is
+single scattering), denoising off, and its linear Rec.709 read from an EXR; the tracer's film gives linear Rec.709
+and per-pixel variances. Block differences are judged against both estimates' noise: Cycles' from two renders with
+different seeds."""
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import NamedTuple
@@ -60,7 +62,9 @@ def blocks(image: np.ndarray) -> np.ndarray:
 def tracer_rgb(scene, spp: int):
     """(linear Rec.709 image, per-pixel variance of each channel's mean, export warnings) of the tracer."""
     export = export_scene(bpy.context.evaluated_depsgraph_get())
-    film = render(export.scene, spp=spp).film
+    # Cycles has no firefly filter (biased, on by default in Blender): the comparison renders without it
+    settings = dataclasses.replace(export.scene.settings, firefly_threshold=0.0)
+    film = render(dataclasses.replace(export.scene, settings=settings), spp=spp).film
     to_rgb = colorimetry.xyz_to_rgb_matrix()
     variance = film.variance @ (to_rgb**2).T  # channels treated as independent: a bound, not an estimate
     return film.xyz @ to_rgb.T, variance, export.warnings

@@ -24,3 +24,7 @@ def assert_same_film(expected: Film, actual: Film):
     assert np.array_equal(expected.sum_spectrum, actual.sum_spectrum)
     assert np.array_equal(expected.xyz, actual.xyz)
     assert np.array_equal(expected.variance, actual.variance)
+    assert len(expected.peaks) == len(actual.peaks)
+    for ours, theirs in zip(expected.peaks, actual.peaks):
+        for part in ("y", "xyz", "light", "spectrum"):
+            assert np.array_equal(getattr(ours, part), getattr(theirs, part))

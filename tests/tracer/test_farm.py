@@ -244,6 +244,22 @@ def test_a_farm_makes_the_light_passes_and_the_spectrum_as_one_process_does(loop
 
 
 @pytest.mark.slow
+def test_a_farm_filters_fireflies_as_one_process_does(loopback):
+    """With the firefly filter each task keeps its pixels' brightest samples, and the passes are of one sample (as
+    a single-process render's then are): the same filtered film, bit for bit, peaks and light passes included."""
+    scene = small_scene(spp=5, bands=2)
+    scene = dataclasses.replace(scene, settings=dataclasses.replace(
+        scene.settings, passes=("Volume Direct", "Volume Indirect"), spectrum=True, firefly_threshold=0.5))
+    expected = single.render(scene)
+    assert expected.film.peaks
+    result = farm.render(scene, scheduler=loopback.address, tile_size=5)
+    assert result.stats["tasks"] == 5 * 2 * 6  # five passes of one sample, two bands, six tiles
+    assert_same_film(expected.film, result.film)
+    for name, image in expected.passes.images.items():
+        np.testing.assert_array_equal(result.passes.images[name], image)
+
+
+@pytest.mark.slow
 def test_cancel_stops_between_tasks_with_whole_passes(reference, loopback):
     scene, expected = reference
     result = farm.render(scene, scheduler=loopback.address, tile_size=5, spp=200,
