@@ -62,7 +62,7 @@ class SpectralRenderSettings(bpy.types.PropertyGroup):
     # Light Paths ▸ Clamping ▸ Firefly Filter (the scene file's default is 0: off)
     use_firefly_filter: bpy.props.BoolProperty(
         name="Firefly Filter", default=True,
-        description="Scale down each pixel's brightest sample where it stands out from its neighbours' samples (a "
+        description="Scale down each pixel's brightest samples where they stand out from its neighbours' samples (a "
                     "rare path that alone would make a speck): removes the fireflies of a few samples; it darkens "
                     "the image a little at low sample counts and less as they grow")
     firefly_threshold: bpy.props.FloatProperty(

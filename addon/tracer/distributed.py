@@ -31,7 +31,7 @@ PACKAGES = ("numpy", "numba", "llvmlite")  # their versions must match between c
 class SceneData:
     """What is scattered to the workers: the kernel scene of each band, and what every task accumulates besides
     XYZ: how many light categories (`light_passes.light_categories`; 0 for none), whether the spectral bins, and
-    whether each pixel's brightest sample (`fireflies.Peaks`, for the firefly filter).
+    whether each pixel's brightest group of samples (`fireflies.Peaks`, for the firefly filter).
 
     One picklable object rather than a list, so that pickling keeps the arrays the bands share
     (grids, majorants, light spectra) once instead of once per band. `digest()` hashes this copy (once per

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from . import checks
 from . import distributed as worker
 from .errors import SpectralError
-from .fireflies import filtered
+from .fireflies import filtered, group_size
 from .farm_plan import PassMerger, Unit, plan
 from .film import Film
 from .light_passes import light_categories, light_images
@@ -374,10 +374,10 @@ class _Job:
         check_settings(dataclasses.replace(settings, spp=spp, seed=seed, backend=backend))
         bands = band_scenes(scene)
         camera = scene.camera
-        peaks = settings.firefly_threshold > 0
-        sizes, tiles, units = plan(camera.width, camera.height, len(bands), spp, int(tile_size), one_sample=peaks)
+        group = group_size(spp) if settings.firefly_threshold > 0 else 0
+        sizes, tiles, units = plan(camera.width, camera.height, len(bands), spp, int(tile_size), group)
         film = Film(camera.width, camera.height, len(bands), light_categories(settings),
-                    bands[0].wavelengths.spectrum_edges, keep_peaks=peaks)
+                    bands[0].wavelengths.spectrum_edges, group)
         merger = PassMerger(film, sizes, tiles)
         return cls(spp, seed, backend, int(tile_size), bands, units, merger)
 

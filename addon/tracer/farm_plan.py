@@ -39,10 +39,10 @@ def image_tiles(width: int, height: int, tile_size: int) -> list[tuple[int, int,
 
 
 def plan(width: int, height: int, bands: int, spp: int, tile_size: int,
-         one_sample: bool = False) -> tuple[list[int], list, list[Unit]]:
-    """(pass sizes, tiles, units): the single-process render's passes × bands × tiles, in pass order (with
-    `one_sample`, as the single-process render for the firefly filter: passes of one sample)."""
-    sizes = [1] * spp if one_sample else pass_sizes(spp)
+         group: int = 0) -> tuple[list[int], list, list[Unit]]:
+    """(pass sizes, tiles, units): the single-process render's passes × bands × tiles, in pass order (with the
+    firefly filter's `group`, as the single-process render then adds them: passes of one group of samples)."""
+    sizes = [group] * (spp // group) if group else pass_sizes(spp)
     tiles = image_tiles(width, height, tile_size)
     units, begin = [], 0
     for pass_index, size in enumerate(sizes):
@@ -70,7 +70,7 @@ class PassMerger:
     def add(self, unit: Unit, sum_xyz: np.ndarray, sum_sq: np.ndarray, sum_transparent: np.ndarray,
             sum_light: np.ndarray | None = None, sum_spectrum: np.ndarray | None = None, peaks=None) -> None:
         """Add a unit's accumulators (`render.render_unit`'s: the light categories' and the spectral bins' where
-        the film has them, and the brightest samples where it keeps them)."""
+        the film has them, and the peaks where it keeps them)."""
         if unit.pass_index < self.next_pass[unit.band]:
             raise ValueError(f"pass {unit.pass_index} of band {unit.band} was already added")
         arrived = self.waiting.setdefault((unit.band, unit.pass_index), {})

@@ -11,7 +11,7 @@ mean per bin, as its XYZ is.
 Accumulators merge by addition, so work split over passes, tiles or machines combines
 exactly (up to floating-point summation order). Samples are counted per pixel, so a film that holds
 part of a pass (some tiles done, others not) is still a consistent image. For the firefly filter a film may also
-keep each pixel's brightest sample per band (`fireflies.Peaks`), merged by maximum.
+keep each pixel's brightest group of samples per band (`fireflies.Peaks`), merged by maximum.
 """
 
 import numpy as np
@@ -51,10 +51,10 @@ class Film:
     `spectrum_edges`: the edges of the spectral image's bins in nm (`spectral_film.bin_edges`; empty: none)."""
 
     def __init__(self, width: int, height: int, bands: int = 1, light_categories: int = 0, spectrum_edges=(),
-                 keep_peaks: bool = False):
+                 group: int = 0):
         self.spectrum_edges = np.asarray(spectrum_edges, dtype=np.float64)
         self.bins = max(self.spectrum_edges.size - 1, 0)
-        check_film_memory(width, height, bands * (1 + light_categories + keep_peaks), self.bins)
+        check_film_memory(width, height, bands * (1 + light_categories + (group > 0)), self.bins)
         self.width, self.height, self.bands = int(width), int(height), int(bands)
         self.light_categories = int(light_categories)
         # Σ XYZ of each light category (`kernels/light_split.py`), for the light passes (`light_passes`)
@@ -64,9 +64,11 @@ class Film:
         self.sum_transparent = np.zeros((self.bands, self.height, self.width))
         self.sum_spectrum = np.zeros((self.bands, self.height, self.width, self.bins))
         self.pixel_samples = np.zeros((self.bands, self.height, self.width), dtype=np.int64)
-        # each band's brightest sample per pixel (`fireflies`), when kept
+        # for the firefly filter (`fireflies`): the samples per group, and each band's brightest group per pixel
+        # (none when `group` is 0)
+        self.group = int(group)
         self.peaks = [Peaks.none(self.height, self.width, self.light_categories, self.bins)
-                      for _ in range(self.bands)] if keep_peaks else []
+                      for _ in range(self.bands)] if group else []
 
     def copy(self) -> "Film":
         """A film with copies of this one's sums (and the same peaks)."""
@@ -81,7 +83,7 @@ class Film:
             sum_spectrum: np.ndarray | None = None, peaks: Peaks | None = None) -> None:
         """Add a tile's accumulators (rows y0…, columns x0…) over `samples` samples per pixel of `band`
         (`sum_transparent` None: samples that saw no background; `sum_light` None: no light categories;
-        `sum_spectrum` None: no spectrum; `peaks`: the tile's brightest samples, kept where the film keeps them)."""
+        `sum_spectrum` None: no spectrum; `peaks`: the tile's brightest groups, kept where the film keeps them)."""
         h, w = sum_xyz.shape[:2]
         self.sum_xyz[band, y0:y0 + h, x0:x0 + w] += sum_xyz
         self.sum_sq[band, y0:y0 + h, x0:x0 + w] += sum_sq
@@ -93,7 +95,7 @@ class Film:
             self.sum_spectrum[band, y0:y0 + h, x0:x0 + w] += sum_spectrum
         self.pixel_samples[band, y0:y0 + h, x0:x0 + w] += samples
         if peaks is not None and self.peaks:
-            self.peaks[band].keep(peaks.xyz, peaks.light, peaks.spectrum, (slice(y0, y0 + h), slice(x0, x0 + w)))
+            self.peaks[band].keep(peaks, (slice(y0, y0 + h), slice(x0, x0 + w)))
 
     @property
     def samples(self) -> np.ndarray:

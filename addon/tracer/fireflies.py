@@ -1,5 +1,5 @@
-"""The firefly filter (RenderSettings.firefly_threshold): each pixel's brightest sample, clamped where it stands
-out from what its neighbourhood's other samples make likely.
+"""The firefly filter (RenderSettings.firefly_threshold): each pixel's brightest group of samples, scaled down where
+it stands out from what its neighbourhood's other samples make likely.
 
 A firefly is a rare large sample: an event of probability p per path (a path that reaches a sunlit face through
 the peak of the phase function, say) shows in a 16-sample pixel with probability about 16·p, yet leaves no trace
@@ -7,15 +7,18 @@ in a 1024-sample image while 1024·p ≪ 1 (bench/README.md, "Speckles of the su
 estimator keeps them; this filter trades a little light at low sample counts for their removal, and the trade
 vanishes as samples grow (it is consistent).
 
-The film keeps, per pixel and band, the brightest sample (by luminance Y) whole: its XYZ, and its light
-categories' and spectral bins' parts (`Peaks`; merged by maximum, so any split of the work keeps the same one).
-When the render ends (`filtered`), each pixel's neighbourhood (3×3 pixels) gives the mean μ and per-sample
-standard deviation σ of Y over its samples, leaving out each pixel's brightest one (so that two fireflies side by
-side do not hide each other). A brightest sample above
-T = μ + k·σ·√n (k the threshold, n the pixel's samples) would move its pixel's mean by more than k of the
-neighbourhood's standard errors: it is scaled down to T, colour kept, as Light Paths ▸ Clamping scales a sample.
-For an estimator of finite variance the largest of n samples grows slower than √n, so the chance that any
-sample is clamped falls to 0 as samples grow.
+A pixel's samples are taken in groups of g consecutive samples (`group_size`: as many as leave every pixel at
+least 4 groups, up to 16: 4 at 16 samples, 16 from 64), one kernel call per group: a call of one sample per pixel
+runs 1.3–1.5× slower per sample than one of 16 (bench/README.md, "The firefly filter"), and on the sunlit Cloud
+preset groups of 1, 2 and 4 at 16 samples removed the same fireflies. The film keeps, per pixel and band, the
+brightest group (by its Σ Y) whole: its Σ XYZ, Σ XYZ² and its light categories' and spectral bins' sums (`Peaks`;
+merged by maximum, so any split of the work keeps the same one). When the render ends (`filtered`), each pixel's
+neighbourhood (3×3 pixels) gives the mean μ and per-sample standard deviation σ of Y over its samples, leaving out
+each pixel's brightest group (so that two fireflies side by side do not hide each other). A group's sum has mean
+g·μ and standard deviation √g·σ over n/g groups: a brightest group above T = g·μ + k·σ·√n (k the threshold, n the
+pixel's samples) would move its pixel's mean by more than k of the neighbourhood's standard errors. It is scaled
+down to T, colour kept, as Light Paths ▸ Clamping scales a sample. For an estimator of finite variance the
+largest of n/g group sums grows slower than √n, so the chance that any group is scaled falls to 0 as samples grow.
 """
 
 from dataclasses import dataclass
@@ -23,34 +26,51 @@ from dataclasses import dataclass
 import numpy as np
 
 NEIGHBOURHOOD = 1  # the neighbourhood's reach in pixels: 3×3
+MIN_GROUPS = 4  # groups per pixel, at least, where the samples allow
+MAX_GROUP = 16  # samples per group, at most
+
+
+def group_size(spp: int) -> int:
+    """Samples per group for a render of `spp`: the largest power of two up to MAX_GROUP that divides `spp` and
+    leaves MIN_GROUPS groups (1 below 8 samples or for an odd count)."""
+    size = 1
+    while size * 2 <= MAX_GROUP and spp % (size * 2) == 0 and spp // (size * 2) >= MIN_GROUPS:
+        size *= 2
+    return size
 
 
 @dataclass
 class Peaks:
-    """The brightest sample of each pixel of a tile (height, width): its Y, XYZ (…, 3), light categories' XYZ
-    (…, categories, 3) and spectral bins (…, bins). Y is −∞ where no sample has arrived."""
+    """The brightest group of samples of each pixel of a tile (height, width): its Σ Y, Σ XYZ (…, 3), Σ XYZ²
+    (…, 3), light categories' Σ XYZ (…, categories, 3) and spectral bins' Σ (…, bins). Y is −∞ where no group has
+    arrived."""
 
     y: np.ndarray
     xyz: np.ndarray
+    sq: np.ndarray
     light: np.ndarray
     spectrum: np.ndarray
 
     @classmethod
     def none(cls, height: int, width: int, light_categories: int = 0, bins: int = 0) -> "Peaks":
-        return cls(np.full((height, width), -np.inf), np.zeros((height, width, 3)),
+        return cls(np.full((height, width), -np.inf), np.zeros((height, width, 3)), np.zeros((height, width, 3)),
                    np.zeros((height, width, light_categories, 3)), np.zeros((height, width, bins)))
 
-    def keep(self, xyz: np.ndarray, light: np.ndarray, spectrum: np.ndarray,
-             region: tuple[slice, slice] = (slice(None), slice(None))) -> None:
-        """Keep, in `region`, each pixel's sample (`xyz`, `light`, `spectrum` of one sample, or other peaks')
-        where it is brighter than the one kept."""
-        brighter = xyz[..., 1] > self.y[region]
-        self.y[region] = np.where(brighter, xyz[..., 1], self.y[region])
-        self.xyz[region] = np.where(brighter[..., None], xyz, self.xyz[region])
+    @classmethod
+    def of(cls, sum_xyz, sum_sq, sum_light, sum_spectrum) -> "Peaks":
+        """One group's sums (a unit's accumulators over the group's samples) as the peaks of its tile."""
+        return cls(sum_xyz[..., 1].copy(), sum_xyz, sum_sq, sum_light, sum_spectrum)
+
+    def keep(self, other: "Peaks", region: tuple[slice, slice] = (slice(None), slice(None))) -> None:
+        """Keep, in `region`, each pixel's group of `other` where it is brighter than the one kept."""
+        brighter = other.y > self.y[region]
+        self.y[region] = np.where(brighter, other.y, self.y[region])
+        self.xyz[region] = np.where(brighter[..., None], other.xyz, self.xyz[region])
+        self.sq[region] = np.where(brighter[..., None], other.sq, self.sq[region])
         if self.light.shape[-2]:
-            self.light[region] = np.where(brighter[..., None, None], light, self.light[region])
+            self.light[region] = np.where(brighter[..., None, None], other.light, self.light[region])
         if self.spectrum.shape[-1]:
-            self.spectrum[region] = np.where(brighter[..., None], spectrum, self.spectrum[region])
+            self.spectrum[region] = np.where(brighter[..., None], other.spectrum, self.spectrum[region])
 
 
 def _window_sum(image: np.ndarray) -> np.ndarray:
@@ -61,33 +81,35 @@ def _window_sum(image: np.ndarray) -> np.ndarray:
     return sum(padded[dy:dy + height, dx:dx + width] for dy in range(2 * reach + 1) for dx in range(2 * reach + 1))
 
 
-def limits(sum_y: np.ndarray, sum_y2: np.ndarray, samples: np.ndarray, peak_y: np.ndarray,
-           threshold: float) -> np.ndarray:
-    """T = μ + k·σ·√n per pixel of one band (module docstring): μ and σ over the neighbourhood's samples but each
-    pixel's brightest; +∞ where fewer than two samples arrived or nothing else is known."""
+def limits(sum_y: np.ndarray, sum_y2: np.ndarray, samples: np.ndarray, peaks: Peaks, group: int) -> np.ndarray:
+    """(g·μ, σ·√n) per pixel of one band, whose limit is g·μ + k·σ·√n (module docstring): μ and σ over the
+    neighbourhood's samples but each pixel's brightest group; σ·√n is +∞ where a pixel has fewer than two groups
+    or its neighbourhood nothing else."""
     has_peak = samples > 0
-    own_peak = np.where(has_peak, peak_y, 0.0)
-    others = _window_sum(samples - has_peak.astype(np.float64))
+    peak_y = np.where(has_peak, peaks.y, 0.0)
+    peak_y2 = np.where(has_peak, peaks.sq[..., 1], 0.0)
+    others = _window_sum(samples - group * has_peak.astype(np.float64))
     safe = np.maximum(others, 1)
-    mean = _window_sum(sum_y - own_peak) / safe
-    spread = np.maximum(_window_sum(sum_y2 - own_peak ** 2) / safe - mean ** 2, 0.0)
-    limit = mean + threshold * np.sqrt(spread) * np.sqrt(samples)
-    return np.where((samples >= 2) & (others >= 1), limit, np.inf)
+    mean = _window_sum(sum_y - peak_y) / safe
+    spread = np.sqrt(np.maximum(_window_sum(sum_y2 - peak_y2) / safe - mean**2, 0.0))
+    scaled = np.where((samples >= 2 * group) & (others >= 1), spread * np.sqrt(samples), np.inf)
+    return group * mean, scaled
 
 
 def filtered(film, threshold: float):
-    """`film` with each pixel's brightest sample of each band scaled down to its limit where it exceeds it
-    (module docstring); the film itself is left as it is. Needs the film's peaks (`Film.peaks`)."""
+    """`film` with each pixel's brightest group of each band scaled down to its limit where it exceeds it
+    (module docstring); the film itself is left as it is. Needs the film's peaks (`Film.peaks`, `Film.group`)."""
     result = film.copy()
     for band, peaks in enumerate(film.peaks):
-        limit = limits(film.sum_xyz[band, ..., 1], film.sum_sq[band, ..., 1], film.pixel_samples[band], peaks.y,
-                       threshold)
+        base, scaled = limits(film.sum_xyz[band, ..., 1], film.sum_sq[band, ..., 1], film.pixel_samples[band], peaks,
+                              film.group)
+        limit = base + threshold * scaled
         over = peaks.y > limit
         if not over.any():
             continue
-        kept = np.where(over, limit / np.where(over, peaks.y, 1.0), 1.0)  # the peak's share that stays
+        kept = np.where(over, limit / np.where(over, peaks.y, 1.0), 1.0)  # the group's share that stays
         result.sum_xyz[band] -= (1.0 - kept)[..., None] * peaks.xyz
-        result.sum_sq[band] -= (1.0 - kept ** 2)[..., None] * peaks.xyz ** 2
+        result.sum_sq[band] -= (1.0 - kept**2)[..., None] * peaks.sq
         result.sum_light[band] -= (1.0 - kept)[..., None, None] * peaks.light
         result.sum_spectrum[band] -= (1.0 - kept)[..., None] * peaks.spectrum
     return result

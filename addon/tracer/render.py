@@ -21,7 +21,7 @@ from .backends import tile_arguments
 from .light_passes import light_categories, light_images
 from .passes import DATA_PASSES, PassImages, render_passes
 from .errors import SpectralError
-from .fireflies import Peaks, filtered
+from .fireflies import Peaks, filtered, group_size
 from .film import Film
 from .kernels.layout import KernelScene
 from .lowering import compile_scene
@@ -46,26 +46,12 @@ def render_unit(kernel_scene: KernelScene, band: int, samples: tuple[int, int], 
     """Σ XYZ, Σ XYZ² and Σ transparency over samples [begin, end) of each pixel in tile (x0, y0, width,
     height), then Σ XYZ of each of `light_categories` light categories (`light_passes.light_categories`; none
     when 0) and, with `spectrum`, the Σ of each spectral bin's estimate (height, width, bins; the scene's bins,
-    `kernel_scene.wavelengths.spectrum_edges`; none without). With `peaks`, a sixth: each pixel's brightest
-    sample (`fireflies.Peaks`), the samples then run one at a time (the sums are the same)."""
-    kernels = backends.named(backend).kernels
-    if not peaks:
-        arguments = tile_arguments(kernel_scene, band, samples, tile, seed, light_categories, spectrum)
-        kernels.render_tile(*arguments)
-        return arguments[-5:]
-    sums, brightest = None, None
-    for sample in range(*samples):
-        arguments = tile_arguments(kernel_scene, band, (sample, sample + 1), tile, seed, light_categories, spectrum)
-        kernels.render_tile(*arguments)
-        one = arguments[-5:]
-        if sums is None:
-            sums = tuple(part.copy() for part in one)
-            brightest = Peaks.none(*one[0].shape[:2], light_categories, one[4].shape[-1])
-        else:
-            for total, part in zip(sums, one):
-                total += part
-        brightest.keep(one[0], one[3], one[4])
-    return (*sums, brightest)
+    `kernel_scene.wavelengths.spectrum_edges`; none without). With `peaks` (the samples are one group of the
+    firefly filter's), a sixth: the same sums as the pixels' peaks (`fireflies.Peaks`)."""
+    arguments = tile_arguments(kernel_scene, band, samples, tile, seed, light_categories, spectrum)
+    backends.named(backend).kernels.render_tile(*arguments)
+    sums = arguments[-5:]
+    return (*sums, Peaks.of(sums[0], sums[1], sums[3], sums[4])) if peaks else sums
 
 
 def passes(spp: int, first: int = 1, largest: int = 16) -> Iterator[tuple[int, int]]:
@@ -196,23 +182,20 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
     bands = band_scenes(scene)
     camera = scene.camera
     categories = light_categories(settings)
-    filter_fireflies = settings.firefly_threshold > 0
-    film = Film(camera.width, camera.height, len(bands), categories, bands[0].wavelengths.spectrum_edges,
-                keep_peaks=filter_fireflies)
+    group = group_size(spp) if settings.firefly_threshold > 0 else 0  # the firefly filter's samples per group
+    film = Film(camera.width, camera.height, len(bands), categories, bands[0].wavelengths.spectrum_edges, group)
     total = camera.width * camera.height * spp * len(bands)
     done = 0
     cancelled = not chosen.prepare(bands[0], seed, cancel, notice)
     tiler = Tiler(camera.width, camera.height, unit_seconds)
     adaptive_state = Adaptive(settings, spp, film)
-    for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler, adaptive_state,
-                                                                     filter_fireflies):
+    for band, samples, tile in () if cancelled else _units(spp, len(bands), tiler, adaptive_state, group):
         if cancel is not None and cancel():
             cancelled = True
             break
         with KERNEL_LAUNCH:
             unit_start = time.perf_counter()
-            sums = render_unit(bands[band], band, samples, tile, seed, backend, categories, film.bins > 0,
-                               filter_fireflies)
+            sums = render_unit(bands[band], band, samples, tile, seed, backend, categories, film.bins > 0, group > 0)
             unit_seconds_taken = time.perf_counter() - unit_start
         size = samples[1] - samples[0]
         tiler.measured(tile, size, unit_seconds_taken)
@@ -220,7 +203,7 @@ def render(scene: Scene, *, spp: int | None = None, seed: int | None = None, bac
         done += tile[2] * tile[3] * size
         if progress is not None:
             progress(film, (done + adaptive_state.skipped * len(bands)) / total)
-    if filter_fireflies:
+    if group:
         film = filtered(film, settings.firefly_threshold)
     data_passes = None if cancelled else first_hit_passes(scene, bands[0], spp, seed, backend, cancel, notice)
     cancelled = data_passes is None
@@ -248,17 +231,17 @@ class Adaptive:
         return active
 
 
-def _units(spp: int, bands: int, tiler: Tiler, adaptive_state: Adaptive | None = None, one_sample: bool = False):
+def _units(spp: int, bands: int, tiler: Tiler, adaptive_state: Adaptive | None = None, group: int = 0):
     """(band, sample range, tile) of each unit: passes in order, each band's pass tile by tile (with adaptive
-    sampling, only the pixels still active when the pass begins). With `one_sample` (the firefly filter's, which
-    sees samples one by one), a pass runs sample by sample, over tiles as large as a unit of one sample may be:
-    as many kernel calls as samples, each as large as without."""
-    for begin, size in passes(spp):
+    sampling, only the pixels still active when the pass begins). With `group` (the firefly filter's samples per
+    group, `fireflies.group_size`), the passes start at one group and run group by group, each over tiles as large
+    as a unit of that many samples may be."""
+    for begin, size in passes(spp, first=max(group, 1)):
         active = None if adaptive_state is None else adaptive_state.active(begin, size)
         if active is not None and not active.any():
             continue  # every pixel is done: the remaining passes are skipped
         for band in range(bands):
-            for first, count in ((sample, 1) for sample in range(begin, begin + size)) if one_sample else \
+            for first, count in ((sample, group) for sample in range(begin, begin + size, group)) if group else \
                     ((begin, size),):
                 for tile in tiler.tiles(count, active):
                     yield band, (first, first + count), tile

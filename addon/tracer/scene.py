@@ -289,8 +289,9 @@ class RenderSettings:
     # bring, in linear Rec.709 (0: no clamping, the default here: unbiased; Blender's are 0 and 10).
     clamp_direct: float = 0.0
     clamp_indirect: float = 0.0
-    # The firefly filter (`fireflies`): each pixel's brightest sample is scaled down to its neighbourhood's mean +
-    # firefly_threshold × their per-sample standard deviation × √samples (0: off, the default here: unbiased).
+    # The firefly filter (`fireflies`): each pixel's brightest group of samples is scaled down to the group's size ×
+    # its neighbourhood's mean + firefly_threshold × their per-sample standard deviation × √samples (0: off, the
+    # default here: unbiased).
     firefly_threshold: float = 0.0
 
 

@@ -9,7 +9,7 @@ import pytest
 
 from addon.tracer.errors import SpectralError
 from addon.tracer.film import Film
-from addon.tracer.fireflies import Peaks, filtered
+from addon.tracer.fireflies import Peaks, filtered, group_size
 from addon.tracer.light_passes import light_images
 from addon.tracer.render import band_scenes, render, render_unit
 from addon.tracer.validation import check_settings
@@ -20,18 +20,17 @@ COLOUR = np.array([0.9, 1.0, 1.1])  # each sample's XYZ is its Y times this
 CATEGORIES, BINS = 2, 3
 
 
-def film_from(y: np.ndarray) -> Film:
-    """A one-band film of the samples y (samples, height, width), added one at a time as a render adds them, each
-    with light categories (Y·(0.25, 0.75) of XYZ) and spectral bins (Y·(1, 2, 3))."""
+def film_from(y: np.ndarray, group: int = 1) -> Film:
+    """A one-band film of the samples y (samples, height, width), added a group of `group` samples at a time as a
+    render adds them, each sample with light categories (Y·(0.25, 0.75) of XYZ) and spectral bins (Y·(1, 2, 3))."""
     _, height, width = y.shape
-    film = Film(width, height, 1, CATEGORIES, np.linspace(400.0, 700.0, BINS + 1), keep_peaks=True)
-    for one in y:
-        xyz = one[..., None] * COLOUR
+    film = Film(width, height, 1, CATEGORIES, np.linspace(400.0, 700.0, BINS + 1), group=group)
+    for first in range(0, y.shape[0], group):
+        xyz = y[first:first + group, ..., None] * COLOUR
         light = xyz[..., None, :] * np.array([0.25, 0.75])[:, None]
-        spectrum = one[..., None] * np.array([1.0, 2.0, 3.0])
-        peaks = Peaks.none(height, width, CATEGORIES, BINS)
-        peaks.keep(xyz, light, spectrum)
-        film.add(0, 0, 0, xyz, xyz**2, 1, np.zeros((height, width)), light, spectrum, peaks)
+        spectrum = y[first:first + group, ..., None] * np.array([1.0, 2.0, 3.0])
+        sums = xyz.sum(axis=0), (xyz**2).sum(axis=0), light.sum(axis=0), spectrum.sum(axis=0)
+        film.add(0, 0, 0, sums[0], sums[1], group, np.zeros((height, width)), sums[2], sums[3], Peaks.of(*sums))
     return film
 
 
@@ -39,11 +38,15 @@ def gaussian_samples(seed=1, samples=16, size=9):
     return np.random.default_rng(seed).normal(1.0, 0.1, size=(samples, size, size))
 
 
-def limit_at(y: np.ndarray, row: int, column: int, threshold: float) -> float:
-    """T = μ + k·σ·√n from the samples themselves: the 3×3 window's samples without each pixel's brightest."""
-    window = y[:, row - 1:row + 2, column - 1:column + 2].reshape(y.shape[0], -1)
-    others = np.sort(window, axis=0)[:-1].ravel()
-    return others.mean() + threshold * others.std() * np.sqrt(y.shape[0])
+def limit_at(y: np.ndarray, row: int, column: int, threshold: float, group: int = 1) -> float:
+    """T = g·μ + k·σ·√n from the samples themselves: μ, σ over the 3×3 window's samples without each pixel's
+    brightest group of `group` consecutive samples."""
+    samples = y.shape[0]
+    window = y[:, row - 1:row + 2, column - 1:column + 2].reshape(samples // group, group, -1)
+    brightest = np.argmax(window.sum(axis=1), axis=0)
+    others = np.concatenate([np.delete(window[..., pixel], brightest[pixel], axis=0).ravel()
+                             for pixel in range(window.shape[-1])])
+    return group * others.mean() + threshold * others.std() * np.sqrt(samples)
 
 
 def test_a_lone_bright_sample_is_scaled_down_to_its_limit_and_nothing_else_changes():
@@ -104,19 +107,48 @@ def test_what_the_filter_takes_fades_as_samples_grow():
     assert taken[1] < taken[0] / 10 and taken[2] < taken[1]
 
 
+def test_a_group_holding_a_firefly_is_scaled_down_as_a_whole():
+    """64 samples in groups of 16 (`group_size(64)`): the group holding the 50 is scaled to 16·μ + 2·σ·√64."""
+    group = group_size(64)
+    assert group == 16
+    y = gaussian_samples(seed=5, samples=64)
+    y[21, 4, 4] = 50.0
+    film = film_from(y, group)
+    result = filtered(film, 2.0)
+    members = y[group:2 * group, 4, 4]
+    limit = limit_at(y, 4, 4, 2.0, group)
+    assert limit < members.sum()
+    expected = (y[:, 4, 4].sum() - members.sum() + limit) / 64
+    assert result.xyz[4, 4, 1] == pytest.approx(expected, rel=1e-12)
+    kept = limit / members.sum()
+    np.testing.assert_allclose(result.sum_sq[0, 4, 4], film.sum_sq[0, 4, 4]
+                               - (1.0 - kept**2) * (members[:, None] ** 2 * COLOUR**2).sum(axis=0), rtol=1e-12)
+    unchanged = np.ones((9, 9), dtype=bool)
+    unchanged[4, 4] = False
+    np.testing.assert_array_equal(result.sum_xyz[0][unchanged], film.sum_xyz[0][unchanged])
+
+
+@pytest.mark.parametrize("spp, size", [(1, 1), (4, 1), (7, 1), (8, 2), (12, 2), (16, 4), (32, 8), (64, 16),
+                                       (100, 4), (1000, 8), (1024, 16)])
+def test_groups_leave_at_least_4_per_pixel_and_hold_at_most_16_samples(spp, size):
+    assert group_size(spp) == size
+
+
 def test_peaks_merge_by_maximum_whatever_the_order():
     rng = np.random.default_rng(4)
-    samples = [rng.random((3, 4, 3)) for _ in range(5)]
+    groups = [Peaks.of(xyz, xyz**2, np.zeros((3, 4, 0, 3)), np.zeros((3, 4, 0)))
+              for xyz in (rng.random((3, 4, 3)) for _ in range(5))]
     kept = []
     for order in (range(5), reversed(range(5))):
         peaks = Peaks.none(3, 4)
         for index in order:
-            peaks.keep(samples[index], np.zeros((3, 4, 0, 3)), np.zeros((3, 4, 0)))
+            peaks.keep(groups[index])
         kept.append(peaks)
-    brightest = np.max([sample[..., 1] for sample in samples], axis=0)
+    brightest = np.max([group.y for group in groups], axis=0)
     for peaks in kept:
         np.testing.assert_array_equal(peaks.y, brightest)
     np.testing.assert_array_equal(kept[0].xyz, kept[1].xyz)
+    np.testing.assert_array_equal(kept[0].sq, kept[1].sq)
 
 
 def test_the_threshold_is_checked_like_the_other_settings():
@@ -134,36 +166,35 @@ def passes_scene(**settings):
         **settings))
 
 
-def test_a_unit_with_peaks_has_the_same_sums_and_each_pixels_brightest_sample():
-    """`render_unit(peaks=True)` runs the samples one at a time: the same sums (to rounding), and the peaks are the
-    sample, of those run alone, with the largest Y, with its light categories' and bins' parts."""
-    scene = passes_scene()
-    kernel_scene = band_scenes(scene)[1]
-    tile = (2, 1, 8, 7)
-    arguments = (kernel_scene, 1, (0, 6), tile, 5, "numba", 9, True)
-    plain = render_unit(*arguments)
-    *sums, peaks = render_unit(*arguments, peaks=True)
-    for with_peaks, without in zip(sums, plain):
-        np.testing.assert_allclose(with_peaks, without, rtol=1e-12, atol=1e-15)
-    alone = [render_unit(kernel_scene, 1, (sample, sample + 1), tile, 5, "numba", 9, True) for sample in range(6)]
-    brightest = np.argmax([one[0][..., 1] for one in alone], axis=0)
-    rows, columns = np.indices(brightest.shape)
-    np.testing.assert_array_equal(peaks.y, np.max([one[0][..., 1] for one in alone], axis=0))
-    for part, index in ((peaks.xyz, 0), (peaks.light, 3), (peaks.spectrum, 4)):
-        np.testing.assert_array_equal(part, np.stack([one[index] for one in alone])[brightest, rows, columns])
-    assert peaks.light.any() and peaks.spectrum.any()
+def test_a_render_keeps_each_pixels_brightest_sample_whole():
+    """At 6 samples a group is one sample: the film's peaks, for each band, are the sample (rendered alone, same
+    seed) with the largest Y, with its XYZ, squares, light categories and bins (a threshold too high to clamp)."""
+    scene = passes_scene(firefly_threshold=1e9)
+    film = render(scene).film
+    assert film.group == 1
+    for band, kernel_scene in enumerate(band_scenes(scene)):
+        alone = [render_unit(kernel_scene, band, (sample, sample + 1), (0, 0, 12, 10), scene.settings.seed, "numba",
+                             film.light_categories, True) for sample in range(6)]
+        brightest = np.argmax([one[0][..., 1] for one in alone], axis=0)
+        rows, columns = np.indices(brightest.shape)
+        peaks = film.peaks[band]
+        np.testing.assert_array_equal(peaks.y, np.max([one[0][..., 1] for one in alone], axis=0))
+        for part, index in (("xyz", 0), ("sq", 1), ("light", 3), ("spectrum", 4)):
+            np.testing.assert_array_equal(getattr(peaks, part),
+                                          np.stack([one[index] for one in alone])[brightest, rows, columns])
+        assert peaks.light.any() and peaks.spectrum.any()
 
 
 def test_a_render_with_the_filter_is_the_filtered_film_of_one_without():
     """Same seeds, same samples: the filtered render's film is the unfiltered one's, filtered (to rounding: its
-    samples are summed one at a time), and its light passes are made from it."""
+    samples are summed a group at a time), and its light passes are made from it."""
     plain = render(passes_scene())
     kept = render(passes_scene(firefly_threshold=0.5))
-    assert not plain.film.peaks and len(kept.film.peaks) == 2
+    assert not plain.film.peaks and len(kept.film.peaks) == 2 and kept.film.group == 1
     np.testing.assert_array_equal(kept.film.pixel_samples, plain.film.pixel_samples)
     assert np.any(kept.film.sum_xyz < plain.film.sum_xyz - 1e-9)  # a low threshold clamps some samples here
     unfiltered = plain.film.copy()
-    unfiltered.peaks = kept.film.peaks
+    unfiltered.peaks, unfiltered.group = kept.film.peaks, kept.film.group
     refiltered = filtered(unfiltered, 0.5)
     for name in ("sum_xyz", "sum_sq", "sum_light", "sum_spectrum"):
         np.testing.assert_allclose(getattr(kept.film, name), getattr(refiltered, name), rtol=1e-10, atol=1e-12)
@@ -184,9 +215,10 @@ def cloud_preset(threshold=0.0):
 def test_the_16_sample_cloud_has_no_fireflies_that_a_1024_sample_image_lacks():
     """z = |Y₁₆ − Y₁₀₂₄| ÷ σ₁₆ per pixel, σ₁₆ the 1024-sample image's own per-sample σ of Y over √16, four 16-sample
     images (seeds 1–4). Without the filter 0.14 % of the pixels are above z 10 (33 of 23 040; the worst 229): single
-    sun estimates of Y ≈ 4 in pixels whose reference is the sky (bench/README.md). With the filter at 2, none of
-    those four images has one (measured: the worst 9.0; over sixteen seeds 2 of 92 160 pixels above 10). Bound: at
-    most 2 pixels. The light it takes at 16 samples (8.6 % here) fades with samples: under 1.5 % at 256 (0.4 %)."""
+    sun estimates of Y ≈ 4 in pixels whose reference is the sky (bench/README.md). With the filter at 2 (groups of
+    4 samples), none of those four images has one (measured: the worst 9.9; over sixteen seeds 2 of 92 160 pixels
+    above 10). Bound: at most 2 pixels. The light it takes at 16 samples (8.9 % here) fades with samples: under
+    1.5 % at 256 (0.5 %)."""
     reference = render(cloud_preset(), spp=1024, seed=1_000_003).film
     y_reference = reference.xyz[..., 1]
     sigma_16 = np.maximum(np.sqrt(reference.variance[..., 1] * 1024) / 4, 1e-12)
