@@ -7,10 +7,11 @@ in a 1024-sample image while 1024·p ≪ 1 (bench/README.md, "Speckles of the su
 estimator keeps them; this filter trades a little light at low sample counts for their removal, and the trade
 vanishes as samples grow (it is consistent).
 
-A pixel's samples are taken in groups of g consecutive samples (`group_size`: as many as leave every pixel at
-least 4 groups, up to 16: 4 at 16 samples, 16 from 64), one kernel call per group: a call of one sample per pixel
-runs 1.3–1.5× slower per sample than one of 16 (bench/README.md, "The firefly filter"), and on the sunlit Cloud
-preset groups of 1, 2 and 4 at 16 samples removed the same fireflies. The film keeps, per pixel and band, the
+A pixel's samples are taken in groups of g consecutive samples (`group_size`: 4 from 16 samples on, fewer below,
+so that every pixel has at least 4 groups), one kernel call per group: a call of one sample per pixel runs
+1.2–1.3× slower per sample than one of 16, one of 4 about 1.05× (bench/README.md, "The firefly filter"), and on
+the sunlit Cloud preset groups of 1, 2 and 4 at 16 samples removed the same fireflies. Larger groups would cost
+less still but hold back the render's first whole image, which comes after one group of samples. The film keeps, per pixel and band, the
 brightest group (by its Σ Y) whole: its Σ XYZ, Σ XYZ² and its light categories' and spectral bins' sums (`Peaks`;
 merged by maximum, so any split of the work keeps the same one). When the render ends (`filtered`), each pixel's
 neighbourhood (3×3 pixels) gives the mean μ and per-sample standard deviation σ of Y over its samples, leaving out
@@ -27,7 +28,7 @@ import numpy as np
 
 NEIGHBOURHOOD = 1  # the neighbourhood's reach in pixels: 3×3
 MIN_GROUPS = 4  # groups per pixel, at least, where the samples allow
-MAX_GROUP = 16  # samples per group, at most
+MAX_GROUP = 4  # samples per group, at most
 
 
 def group_size(spp: int) -> int:

@@ -108,14 +108,15 @@ def test_what_the_filter_takes_fades_as_samples_grow():
 
 
 def test_a_group_holding_a_firefly_is_scaled_down_as_a_whole():
-    """64 samples in groups of 16 (`group_size(64)`): the group holding the 50 is scaled to 16·μ + 2·σ·√64."""
+    """64 samples in groups of 4 (`group_size(64)`): the group holding the 50 is scaled to 4·μ + 2·σ·√64."""
     group = group_size(64)
-    assert group == 16
+    assert group == 4
     y = gaussian_samples(seed=5, samples=64)
     y[21, 4, 4] = 50.0
     film = film_from(y, group)
     result = filtered(film, 2.0)
-    members = y[group:2 * group, 4, 4]
+    first = 21 // group * group
+    members = y[first:first + group, 4, 4]
     limit = limit_at(y, 4, 4, 2.0, group)
     assert limit < members.sum()
     expected = (y[:, 4, 4].sum() - members.sum() + limit) / 64
@@ -128,9 +129,9 @@ def test_a_group_holding_a_firefly_is_scaled_down_as_a_whole():
     np.testing.assert_array_equal(result.sum_xyz[0][unchanged], film.sum_xyz[0][unchanged])
 
 
-@pytest.mark.parametrize("spp, size", [(1, 1), (4, 1), (7, 1), (8, 2), (12, 2), (16, 4), (32, 8), (64, 16),
-                                       (100, 4), (1000, 8), (1024, 16)])
-def test_groups_leave_at_least_4_per_pixel_and_hold_at_most_16_samples(spp, size):
+@pytest.mark.parametrize("spp, size", [(1, 1), (4, 1), (7, 1), (8, 2), (12, 2), (16, 4), (64, 4), (100, 4),
+                                       (1022, 2), (1024, 4)])
+def test_groups_leave_at_least_4_per_pixel_and_hold_at_most_4_samples(spp, size):
     assert group_size(spp) == size
 
 
@@ -218,7 +219,7 @@ def test_the_16_sample_cloud_has_no_fireflies_that_a_1024_sample_image_lacks():
     sun estimates of Y ≈ 4 in pixels whose reference is the sky (bench/README.md). With the filter at 2 (groups of
     4 samples), none of those four images has one (measured: the worst 9.9; over sixteen seeds 2 of 92 160 pixels
     above 10). Bound: at most 2 pixels. The light it takes at 16 samples (8.9 % here) fades with samples: under
-    1.5 % at 256 (0.5 %)."""
+    1.5 % at 256 (0.4 %)."""
     reference = render(cloud_preset(), spp=1024, seed=1_000_003).film
     y_reference = reference.xyz[..., 1]
     sigma_16 = np.maximum(np.sqrt(reference.variance[..., 1] * 1024) / 4, 1e-12)
