@@ -340,8 +340,8 @@ def part_filter(args):
     reference, sigma = luminance_and_sigma(render(scene, spp=args.reference_spp, seed=REFERENCE_SEED).film)
     sigma_16 = np.maximum(sigma / np.sqrt(16), 1e-12)
     print(f"\n4. The firefly filter: z of {args.seeds} 16-spp images against the unfiltered {args.reference_spp}-spp "
-          f"reference; mean Y taken at 16, 64, 256 spp (seed 7, against the unfiltered render of that seed); wall-clock s per "
-          f"render (median of 3)")
+          f"reference; mean Y taken at 16, 64, 256 spp (seed 7, against the unfiltered render of that seed); "
+          f"wall-clock s per render (median of 3)")
     print(f"{'firefly_threshold':18} {'p50':>6} {'p90':>6} {'p99':>6} {'max':>8}  {'>3':>7} {'>5':>7} {'>10':>7}  "
           f"{'taken 16':>8} {'64':>7} {'256':>7}")
     for threshold in (0.0, 1.0, 2.0, 3.0):

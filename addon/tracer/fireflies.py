@@ -7,19 +7,21 @@ in a 1024-sample image while 1024·p ≪ 1 (bench/README.md, "Speckles of the su
 estimator keeps them; this filter trades a little light at low sample counts for their removal, and the trade
 vanishes as samples grow (it is consistent).
 
-A pixel's samples are taken in groups of g consecutive samples (`group_size`: 4 from 16 samples on, fewer below,
-so that every pixel has at least 4 groups), one kernel call per group: a call of one sample per pixel runs
-1.2–1.3× slower per sample than one of 16, one of 4 about 1.05× (bench/README.md, "The firefly filter"), and on
-the sunlit Cloud preset groups of 1, 2 and 4 at 16 samples removed the same fireflies. Larger groups would cost
-less still but hold back the render's first whole image, which comes after one group of samples. The film keeps, per pixel and band, the
-brightest group (by its Σ Y) whole: its Σ XYZ, Σ XYZ² and its light categories' and spectral bins' sums (`Peaks`;
-merged by maximum, so any split of the work keeps the same one). When the render ends (`filtered`), each pixel's
-neighbourhood (3×3 pixels) gives the mean μ and per-sample standard deviation σ of Y over its samples, leaving out
-each pixel's brightest group (so that two fireflies side by side do not hide each other). A group's sum has mean
-g·μ and standard deviation √g·σ over n/g groups: a brightest group above T = g·μ + k·σ·√n (k the threshold, n the
-pixel's samples) would move its pixel's mean by more than k of the neighbourhood's standard errors. It is scaled
-down to T, colour kept, as Light Paths ▸ Clamping scales a sample. For an estimator of finite variance the
-largest of n/g group sums grows slower than √n, so the chance that any group is scaled falls to 0 as samples grow.
+A pixel's samples are taken in groups of g consecutive samples (`group_size`: 4 from 16 samples on, fewer below, so
+that every pixel has at least 4 groups), one kernel call per group: a call of one sample per pixel runs 1.2–1.3×
+slower per sample than one of 16, one of 4 about 1.05× (bench/README.md, "The firefly filter"), and on the sunlit
+Cloud preset groups of 1, 2 and 4 at 16 samples removed the same fireflies. Larger groups would cost less still but
+hold back the render's first whole image, which comes after one group of samples.
+
+The film keeps, per pixel and band, the brightest group (by its Σ Y) whole: its Σ XYZ, Σ XYZ² and its light
+categories' and spectral bins' sums (`Peaks`; merged by maximum, so any split of the work keeps the same one). When
+the render ends (`filtered`), each pixel's neighbourhood (3×3 pixels) gives the mean μ and per-sample standard
+deviation σ of Y over its samples, leaving out each pixel's brightest group (so that two fireflies side by side do
+not hide each other). A group's sum has mean g·μ and standard deviation √g·σ over n/g groups: a brightest group
+above T = g·μ + k·σ·√n (k the threshold, n the pixel's samples) would move its pixel's mean by more than k of the
+neighbourhood's standard errors. It is scaled down to T, colour kept, as Light Paths ▸ Clamping scales a sample. For
+an estimator of finite variance the largest of n/g group sums grows slower than √n, so the chance that any group is
+scaled falls to 0 as samples grow.
 """
 
 from dataclasses import dataclass
