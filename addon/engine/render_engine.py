@@ -45,6 +45,7 @@ from .thumbnails import preview_scene
 from ..props.render import ENGINE_ID
 from ..tracer.denoise import available as denoise_available, denoised_rgb
 from ..tracer.errors import SpectralError
+from ..tracer.fireflies import as_finished
 from ..tracer.image_io import PASSES
 from ..tracer.passes import DEPTH, MIST, NORMAL, pass_channels
 from ..tracer.scene import RenderSettings
@@ -106,7 +107,7 @@ class SpectralVolumeEngine(bpy.types.RenderEngine):
                              + ("" if left is None else f" | about {left:.0f} s left"))
             if throttle.due() and not self.test_break():  # after Esc, stop at once: the full result is written below
                 with throttle.timed():
-                    self._write(result, film, preview=True)
+                    self._write(result, as_finished(film, scene.settings.firefly_threshold), preview=True)
 
         job.run(progress=progress, notice=self._show_stats, cancel=self.test_break)
         problem = job.error

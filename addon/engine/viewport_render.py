@@ -26,6 +26,7 @@ from ..jobs.tracer_job import render_tracer
 from ..output import blender_rows, with_alpha
 from ..tracer.denoise import denoised_rgb
 from ..tracer.errors import SpectralError
+from ..tracer.fireflies import as_finished
 from ..tracer.progress import Throttle
 from ..tracer.scene import Camera, Scene
 
@@ -236,7 +237,8 @@ class ViewportRenderer:
                         shown = self.frame
                         behind = shown.pixels if shown is not None and shown.request == number else None
                         complete = bool(film.pixel_samples.min() > 0)
-                        pixels = filled(view_pixels(film, width, height, denoised and complete), film, behind)
+                        shown_film = as_finished(film, scene.settings.firefly_threshold)
+                        pixels = filled(view_pixels(shown_film, width, height, denoised and complete), film, behind)
                         self._show(number, frame=Frame(pixels, (step.width, step.height), int(film.samples.min()),
                                                        number))
 

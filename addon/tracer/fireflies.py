@@ -116,3 +116,9 @@ def filtered(film, threshold: float):
         result.sum_light[band] -= (1.0 - kept)[..., None, None] * peaks.light
         result.sum_spectrum[band] -= (1.0 - kept)[..., None] * peaks.spectrum
     return result
+
+
+def as_finished(film, threshold: float):
+    """A film still rendering, as the finished render will show it: filtered where it keeps peaks (the fireflies
+    would otherwise show in the progress images until the last sample, then vanish)."""
+    return filtered(film, threshold) if film.peaks else film

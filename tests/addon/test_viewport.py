@@ -23,6 +23,7 @@ from addon.tracer.render import RenderResult, render
 from addon.tracer.scene import look_at
 from addon.engine.viewport_render import (RESOLUTION_DIVISORS, Step, ViewportRenderer, filled, resized, schedule,
                                    view_camera, view_pixels)
+from addon.tracer.fireflies import Peaks, as_finished, filtered
 from tests.addon.builders import basic_scene, tiny_render
 from tests.support import scenes
 
@@ -86,6 +87,25 @@ def test_the_full_views_first_pass_fills_the_previous_image():
     np.testing.assert_array_equal(pixels[1], view_pixels(_constant_film(3, 2, 2.0), 3, 2)[1])  # top row: rendered
     np.testing.assert_array_equal(pixels[0], behind[0])  # bottom row (first in the pixels): the previous image
     np.testing.assert_array_equal(filled(view_pixels(film, 3, 2), film, None), view_pixels(film, 3, 2))
+
+
+def test_a_refining_image_is_shown_filtered_as_the_result_will_be():
+    """With the firefly filter a film keeps peaks, and its progress images (the viewport's while it refines, F12's
+    Render Result) show it filtered; without the filter the film is shown as it is."""
+    rng = np.random.default_rng(6)
+    film = Film(5, 5, group=1)
+    for sample in range(8):
+        xyz = rng.normal(1.0, 0.1, size=(5, 5, 3))
+        if sample == 3:
+            xyz[2, 2] = 40.0
+        film.add(0, 0, 0, xyz, xyz**2, 1, None, None, None, Peaks.of(xyz, xyz**2, np.zeros((5, 5, 0, 3)),
+                                                                      np.zeros((5, 5, 0))))
+    settings = scenes.scene(scenes.perspective_camera(5, 5), firefly_threshold=2.0).settings
+    shown = as_finished(film, settings.firefly_threshold)
+    assert shown.xyz[2, 2, 1] < 3.0 < film.xyz[2, 2, 1]
+    np.testing.assert_array_equal(shown.sum_xyz, filtered(film, 2.0).sum_xyz)
+    plain = _constant_film(5, 5, 1.0)
+    assert as_finished(plain, settings.firefly_threshold) is plain
 
 
 class StandInRun:
