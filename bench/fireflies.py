@@ -28,8 +28,9 @@ D65 sun and a faint sky (`--sky`, radiance Y; the benchmark's sky is 0.5).
 
 4. The firefly filter (`addon/tracer/fireflies.py`, docs/algorithm.md): the z figures of part 1 at 16 spp over
    `--seeds` images for firefly_threshold off, 1, 2 and 3, with the mean Y it takes at 16, 64 and 256 spp (one
-   image each, against the unfiltered image of the same seed), and the render time with and without it (its passes run one sample at a
-   time) at this size and at 4× the width and height. `--filter` runs this part alone.
+   image each, against the unfiltered image of the same seed), and the render time with and without it (its
+   passes run a group of samples at a time) at this size and at 4× the width and height. `--filter` runs this
+   part alone.
 
 Nothing is asserted. python -m bench.fireflies [--quick] [--clamping] [--filter]
 """
@@ -294,9 +295,9 @@ def part_oracle(args, found):
         print(f"   {c:6g} {cut.sum() / e['y'].sum():7.2%}   {describe(clamped)}")
 
 
-def clamped(scene, direct, indirect):
-    return dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, clamp_direct=direct,
-                                                                   clamp_indirect=indirect))
+def with_settings(scene, **changes):
+    """`scene` with these RenderSettings fields changed."""
+    return dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, **changes))
 
 
 def part_clamping(args):
@@ -309,7 +310,7 @@ def part_clamping(args):
     print(f"{'clamp (direct, indirect)':26} {'vs unclamped ref':>16} {'vs own ref':>10} {'mean Y lost':>11}   "
           f"z vs unclamped: {'p50':>6} {'p90':>6} {'p99':>6} {'max':>8}  {'>3':>7} {'>5':>7} {'>10':>7}")
     for direct, indirect in ((0.0, 0.0), (0.0, 10.0), (0.0, 1.0)):
-        version = clamped(scene, direct, indirect)
+        version = with_settings(scene, clamp_direct=direct, clamp_indirect=indirect)
         own = reference if indirect == 0.0 and direct == 0.0 else render(
             version, spp=args.reference_spp, seed=REFERENCE_SEED).film.xyz[..., 1]
         images = np.stack([render(version, spp=16, seed=seed).film.xyz[..., 1] for seed in range(1, args.seeds + 1)])
@@ -319,10 +320,6 @@ def part_clamping(args):
         z = np.abs(images - reference) / sigma_16
         label = "off" if direct == indirect == 0.0 else f"{direct:g}, {indirect:g}"
         print(f"{label:26} {rmse:16.4f} {rmse_own:10.4f} {lost:11.2%}   {'':16}{describe(z)}", flush=True)
-
-
-def filtering(scene, threshold):
-    return dataclasses.replace(scene, settings=dataclasses.replace(scene.settings, firefly_threshold=threshold))
 
 
 def seconds_to_render(scene, spp):
@@ -345,7 +342,7 @@ def part_filter(args):
     print(f"{'firefly_threshold':18} {'p50':>6} {'p90':>6} {'p99':>6} {'max':>8}  {'>3':>7} {'>5':>7} {'>10':>7}  "
           f"{'taken 16':>8} {'64':>7} {'256':>7}")
     for threshold in (0.0, 1.0, 2.0, 3.0):
-        version = filtering(scene, threshold)
+        version = with_settings(scene, firefly_threshold=threshold)
         images = np.stack([render(version, spp=16, seed=seed).film.xyz[..., 1] for seed in range(1, args.seeds + 1)])
         z = np.abs(images - reference) / sigma_16
         taken = [1.0 - render(version, spp=spp, seed=7).film.xyz[..., 1].mean()
@@ -356,7 +353,7 @@ def part_filter(args):
         sized = argparse.Namespace(**{**vars(args), "width": args.width * scale, "height": args.height * scale})
         plain = cloud_preset_scene(sized, args.max_depth)
         for spp in (16, 256) if scale == 1 else (16,):
-            off, on = seconds_to_render(plain, spp), seconds_to_render(filtering(plain, 2.0), spp)
+            off, on = seconds_to_render(plain, spp), seconds_to_render(with_settings(plain, firefly_threshold=2.0), spp)
             print(f"   {sized.width}×{sized.height}, {spp} spp: {off:.2f} s without the filter, {on:.2f} s with it "
                   f"({on / off:.2f}×)", flush=True)
 

@@ -44,11 +44,9 @@ def group_size(spp: int) -> int:
 
 @dataclass
 class Peaks:
-    """The brightest group of samples of each pixel of a tile (height, width): its Σ Y, Σ XYZ (…, 3), Σ XYZ²
-    (…, 3), light categories' Σ XYZ (…, categories, 3) and spectral bins' Σ (…, bins). Y is −∞ where no group has
-    arrived."""
+    """The brightest group of samples of each pixel of a tile (height, width): its Σ XYZ (…, 3), Σ XYZ² (…, 3),
+    light categories' Σ XYZ (…, categories, 3) and spectral bins' Σ (…, bins); all 0 where no group has arrived."""
 
-    y: np.ndarray
     xyz: np.ndarray
     sq: np.ndarray
     light: np.ndarray
@@ -56,24 +54,27 @@ class Peaks:
 
     @classmethod
     def none(cls, height: int, width: int, light_categories: int = 0, bins: int = 0) -> "Peaks":
-        return cls(np.full((height, width), -np.inf), np.zeros((height, width, 3)), np.zeros((height, width, 3)),
+        return cls(np.zeros((height, width, 3)), np.zeros((height, width, 3)),
                    np.zeros((height, width, light_categories, 3)), np.zeros((height, width, bins)))
 
     @classmethod
     def of(cls, sum_xyz, sum_sq, sum_light, sum_spectrum) -> "Peaks":
         """One group's sums (a unit's accumulators over the group's samples) as the peaks of its tile."""
-        return cls(sum_xyz[..., 1].copy(), sum_xyz, sum_sq, sum_light, sum_spectrum)
+        return cls(sum_xyz, sum_sq, sum_light, sum_spectrum)
+
+    @property
+    def y(self) -> np.ndarray:
+        """Σ Y of each pixel's group: what "brightest" ranks by."""
+        return self.xyz[..., 1]
 
     def keep(self, other: "Peaks", region: tuple[slice, slice] = (slice(None), slice(None))) -> None:
-        """Keep, in `region`, each pixel's group of `other` where it is brighter than the one kept."""
+        """Keep, in `region`, each pixel's group of `other` where it is brighter than the one kept (a group of
+        Y 0 changes nothing the filter uses: it is never above a limit)."""
         brighter = other.y > self.y[region]
-        self.y[region] = np.where(brighter, other.y, self.y[region])
         self.xyz[region] = np.where(brighter[..., None], other.xyz, self.xyz[region])
         self.sq[region] = np.where(brighter[..., None], other.sq, self.sq[region])
-        if self.light.shape[-2]:
-            self.light[region] = np.where(brighter[..., None, None], other.light, self.light[region])
-        if self.spectrum.shape[-1]:
-            self.spectrum[region] = np.where(brighter[..., None], other.spectrum, self.spectrum[region])
+        self.light[region] = np.where(brighter[..., None, None], other.light, self.light[region])
+        self.spectrum[region] = np.where(brighter[..., None], other.spectrum, self.spectrum[region])
 
 
 def _window_sum(image: np.ndarray) -> np.ndarray:
@@ -84,17 +85,15 @@ def _window_sum(image: np.ndarray) -> np.ndarray:
     return sum(padded[dy:dy + height, dx:dx + width] for dy in range(2 * reach + 1) for dx in range(2 * reach + 1))
 
 
-def limits(sum_y: np.ndarray, sum_y2: np.ndarray, samples: np.ndarray, peaks: Peaks, group: int) -> np.ndarray:
+def limits(sum_y: np.ndarray, sum_y2: np.ndarray, samples: np.ndarray, peaks: Peaks,
+           group: int) -> tuple[np.ndarray, np.ndarray]:
     """(g·μ, σ·√n) per pixel of one band, whose limit is g·μ + k·σ·√n (module docstring): μ and σ over the
     neighbourhood's samples but each pixel's brightest group; σ·√n is +∞ where a pixel has fewer than two groups
     or its neighbourhood nothing else."""
-    has_peak = samples > 0
-    peak_y = np.where(has_peak, peaks.y, 0.0)
-    peak_y2 = np.where(has_peak, peaks.sq[..., 1], 0.0)
-    others = _window_sum(samples - group * has_peak.astype(np.float64))
+    others = _window_sum(samples - group * (samples > 0).astype(np.float64))
     safe = np.maximum(others, 1)
-    mean = _window_sum(sum_y - peak_y) / safe
-    spread = np.sqrt(np.maximum(_window_sum(sum_y2 - peak_y2) / safe - mean**2, 0.0))
+    mean = _window_sum(sum_y - peaks.y) / safe
+    spread = np.sqrt(np.maximum(_window_sum(sum_y2 - peaks.sq[..., 1]) / safe - mean**2, 0.0))
     scaled = np.where((samples >= 2 * group) & (others >= 1), spread * np.sqrt(samples), np.inf)
     return group * mean, scaled
 

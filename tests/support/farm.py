@@ -26,5 +26,5 @@ def assert_same_film(expected: Film, actual: Film):
     assert np.array_equal(expected.variance, actual.variance)
     assert len(expected.peaks) == len(actual.peaks)
     for ours, theirs in zip(expected.peaks, actual.peaks):
-        for part in ("y", "xyz", "light", "spectrum"):
+        for part in ("xyz", "sq", "light", "spectrum"):
             assert np.array_equal(getattr(ours, part), getattr(theirs, part))
